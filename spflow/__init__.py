@@ -1,0 +1,59 @@
+"""spflow — history matching, uncertainty quantification and design of surfactant-polymer corefloods.
+
+A pipeline is a DAG of named stages (pluggy plugins) exchanging typed xarray Datasets; the executor caches every
+result under a provenance key and runs independent work in parallel. See ``docs/`` for the user and plugin guides.
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+from spflow.core.errors import (
+    CacheIntegrityWarning,
+    ParameterError,
+    PipelineError,
+    PluginError,
+    SchemaError,
+    SpflowError,
+    StageError,
+)
+from spflow.core.executor import NodeStatus, RunResult, run, status
+from spflow.core.hashing import canonical_hash
+from spflow.core.hookspecs import hookimpl
+from spflow.core.params import Param
+from spflow.core.pipeline import Pipeline
+from spflow.core.plugins import get_registry, register_plugin, reset_registry, unregister_plugin
+from spflow.core.schema import DatasetSchema, Variable
+from spflow.core.stage import Stage, StageContext
+
+try:
+    __version__ = version("spflow")
+except PackageNotFoundError:  # running from a source tree that is not installed
+    __version__ = "0+unknown"
+
+__all__ = [
+    "CacheIntegrityWarning",
+    "DatasetSchema",
+    "NodeStatus",
+    "Param",
+    "ParameterError",
+    "Pipeline",
+    "PipelineError",
+    "PluginError",
+    "RunResult",
+    "SchemaError",
+    "SpflowError",
+    "Stage",
+    "StageContext",
+    "StageError",
+    "Variable",
+    "__version__",
+    "canonical_hash",
+    "get_registry",
+    "hookimpl",
+    "register_plugin",
+    "reset_registry",
+    "run",
+    "status",
+    "unregister_plugin",
+]

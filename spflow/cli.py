@@ -1,0 +1,159 @@
+"""The ``spflow`` command: run, status, list, clean.
+
+    spflow run PIPELINE [--until NODE] [--only NODE] [--force NODE] [--jobs N] [--backend loky|threads|dask]
+                        [--scheduler ADDRESS] [--cache DIR] [--out DIR]
+    spflow status PIPELINE [--cache DIR]
+    spflow list [stages|effects|params]
+    spflow clean [--cache DIR] [--tmp]
+
+PIPELINE is a path to a Python file, a name in ``./pipelines/`` (``demo`` -> ``pipelines/demo.py``) or a dotted
+module; the module defines ``pipeline`` (a Pipeline or a function returning one) and optionally
+``report(result, outdir)``, called after a successful run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import runpy
+import sys
+from pathlib import Path
+from typing import Any
+
+from spflow.core.errors import SpflowError
+from spflow.core.executor import BACKENDS, run, status
+from spflow.core.pipeline import Pipeline
+from spflow.core.plugins import get_registry
+
+
+def load_pipeline_module(spec: str) -> dict[str, Any]:
+    """Namespace of the pipeline module named by ``spec`` (file path, ``pipelines/`` name or dotted module)."""
+    path = Path(spec)
+    if path.suffix == ".py" and path.is_file():
+        return runpy.run_path(str(path))
+    local = Path("pipelines") / f"{spec}.py"
+    if local.is_file():
+        return runpy.run_path(str(local))
+    try:
+        return vars(importlib.import_module(spec))
+    except ImportError:
+        raise SpflowError(f"pipeline {spec!r} not found: not a .py file, not pipelines/{spec}.py, not a module") from None
+
+
+def _pipeline_from(namespace: dict[str, Any], spec: str) -> Pipeline:
+    obj = namespace.get("pipeline")
+    if callable(obj) and not isinstance(obj, Pipeline):
+        obj = obj()
+    if not isinstance(obj, Pipeline):
+        raise SpflowError(f"pipeline module {spec!r} must define 'pipeline' (a Pipeline or a function returning one)")
+    return obj
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    namespace = load_pipeline_module(args.pipeline)
+    pipe = _pipeline_from(namespace, args.pipeline)
+    result = run(pipe, cache=args.cache, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
+                 until=args.until, only=args.only, force=args.force or (), verbose=True)
+    print(f"{pipe.name}: {len(result.executed)} node(s) executed, {len(result.cached)} from cache")
+    for node in result.executed:
+        print(f"  ran    {node}")
+    for node in result.cached:
+        print(f"  cached {node}")
+    report = namespace.get("report")
+    if report is not None and not (args.until or args.only):
+        outdir = Path(args.out or Path("out") / pipe.name)
+        outdir.mkdir(parents=True, exist_ok=True)
+        for line in report(result, outdir) or []:
+            print(line)
+    return 0
+
+
+def _cmd_status(args: argparse.Namespace) -> int:
+    namespace = load_pipeline_module(args.pipeline)
+    pipe = _pipeline_from(namespace, args.pipeline)
+    rows = status(pipe, cache=args.cache)
+    width = max(len(r.node) for r in rows)
+    for r in rows:
+        state = "fresh" if r.fresh else "stale"
+        why = "" if r.fresh else " — " + "; ".join(r.reasons)
+        print(f"{r.node:<{width}}  {r.stage:<16} {state}{why}")
+    return 0
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    registry = get_registry()
+    what = args.what
+    if what in ("stages", "all"):
+        print("stages:")
+        for name in sorted(registry.stages):
+            cls = registry.stages[name]
+            print(f"  {name} (version {cls.version}, from {registry.providers['stage:' + name]}): {cls.description}")
+            for pname, p in sorted(cls.params.items()):
+                default = "required" if p.required else f"default {p.default!r}"
+                print(f"      param {pname}: {p.kind.__name__}, {default}, {p.describe_range()}  {p.doc}")
+            for port, schema in cls.inputs.items():
+                print(f"      input {port}: {schema.describe() if schema else 'any Dataset'}")
+            print(f"      output: {cls.output.describe() if cls.output else 'any Dataset'}")
+    if what in ("effects", "all"):
+        print("effects:")
+        for name in sorted(registry.effects):
+            effect = registry.effects[name]
+            print(f"  {name} (default strength {effect.default_strength}): {effect.description}")
+    if what in ("params", "all"):
+        from spflow.plugins.forward.parameters import parameter_table
+
+        print("forward-model parameters:")
+        for row in parameter_table():
+            print(f"  {row['name']:<9} [{row['unit']}] default {row['default']!r}, "
+                  f"bounds [{row['lower']}, {row['upper']}]  {row['description']}")
+    return 0
+
+
+def _cmd_clean(args: argparse.Namespace) -> int:
+    from spflow.core.cache import Store
+
+    n = Store(args.cache).clean(tmp_only=args.tmp)
+    print(f"removed {n} {'temporary ' if args.tmp else ''}entr{'y' if n == 1 else 'ies'} from {args.cache}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="spflow", description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p_run = sub.add_parser("run", help="run a pipeline (cached nodes are reused)")
+    p_run.add_argument("pipeline")
+    p_run.add_argument("--until", action="append", metavar="NODE", help="run NODE and its ancestors only")
+    p_run.add_argument("--only", action="append", metavar="NODE", help="run NODE only (inputs must be cached)")
+    p_run.add_argument("--force", action="append", metavar="NODE", help="recompute NODE and its descendants")
+    p_run.add_argument("--jobs", type=int, default=1, metavar="N")
+    p_run.add_argument("--backend", choices=sorted(BACKENDS), default="loky")
+    p_run.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address for --backend dask")
+    p_run.add_argument("--out", metavar="DIR", help="where the pipeline's report goes (default out/<pipeline>)")
+
+    p_status = sub.add_parser("status", help="say for each node whether it is fresh, and why it is stale")
+    p_status.add_argument("pipeline")
+
+    p_list = sub.add_parser("list", help="list registered stages, effects and forward-model parameters")
+    p_list.add_argument("what", nargs="?", choices=["stages", "effects", "params", "all"], default="all")
+
+    p_clean = sub.add_parser("clean", help="delete the cache")
+    p_clean.add_argument("--tmp", action="store_true", help="only delete unfinished temporary entries")
+
+    for p in (p_run, p_status, p_clean):
+        p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    handler = {"run": _cmd_run, "status": _cmd_status, "list": _cmd_list, "clean": _cmd_clean}[args.command]
+    try:
+        return handler(args)
+    except SpflowError as exc:
+        print(f"spflow: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

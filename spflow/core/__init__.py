@@ -1,0 +1,1 @@
+"""spflow's framework core: stages, schemas, params, pipelines, hashing, the store, plugins and the executor."""

@@ -1,0 +1,309 @@
+"""Run a pipeline: plan from provenance keys, reuse cached results, execute the rest level by level in parallel.
+
+* Keys are computed for every node before anything runs (see :mod:`spflow.core.provenance`).
+* A node whose key is in the store (and passes its checksum) is not executed; a corrupt entry is discarded with a
+  :class:`~spflow.core.errors.CacheIntegrityWarning` and recomputed.
+* Nodes to execute run by topological generation. A generation of several nodes runs them side by side with joblib
+  (each node then gets ``n_jobs=1`` for its own work); a lone node gets the whole worker budget for its inner
+  parallelism. One parallel layer per level.
+* Each finished node is validated and written to the store as soon as it completes, so an exception or
+  KeyboardInterrupt loses nothing that finished; the next run resumes from there.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+import time
+import warnings
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import networkx as nx
+import xarray as xr
+
+from .cache import Store
+from .errors import CacheIntegrityWarning, PipelineError, StageError
+from .pipeline import Pipeline
+from .plugins import get_registry
+from .provenance import key_of, provenance, stale_reasons
+from .stage import Stage, StageContext
+
+__all__ = ["run", "status", "RunResult", "NodeStatus", "BACKENDS"]
+
+#: CLI/backend names -> joblib backend names.
+BACKENDS = {"loky": "loky", "threads": "threading", "threading": "threading", "dask": "dask"}
+
+
+@dataclass
+class _Plan:
+    pipeline: Pipeline
+    stages: dict[str, Stage]
+    prov: dict[str, dict[str, Any]]
+    keys: dict[str, str]
+    order: list[str]
+    graph: nx.DiGraph
+
+
+def _instantiate(pipeline: Pipeline) -> dict[str, Stage]:
+    """Create every node's stage with validated params and check its wiring — before any work."""
+    from spflow.plugins.data import DataStage
+
+    registry = get_registry()
+    stages: dict[str, Stage] = {}
+    for node in pipeline.nodes.values():
+        if node.stage == "data":
+            if node.dataset is None:
+                raise PipelineError(f"node {node.name!r}: stage 'data' nodes are added with Pipeline.add_data()")
+            stages[node.name] = DataStage.holding(node.dataset)
+            continue
+        cls = registry.stage(node.stage)
+        stages[node.name] = cls(**node.params)
+        unknown = sorted(set(node.inputs) - set(cls.inputs))
+        if unknown:
+            raise PipelineError(
+                f"node {node.name!r}: stage {cls.name!r} has no input port {unknown[0]!r}; ports: {sorted(cls.inputs)}"
+            )
+        missing = sorted(set(cls.inputs) - set(node.inputs) - set(cls.optional_inputs))
+        if missing:
+            raise PipelineError(f"node {node.name!r}: input port {missing[0]!r} of stage {cls.name!r} is not wired")
+    return stages
+
+
+def _plan(pipeline: Pipeline) -> _Plan:
+    graph = pipeline.graph()
+    order = pipeline.order()
+    stages = _instantiate(pipeline)
+    prov: dict[str, dict[str, Any]] = {}
+    keys: dict[str, str] = {}
+    for name in order:
+        inputs = {port: keys[up] for port, up in pipeline.nodes[name].inputs.items()}
+        prov[name] = provenance(stages[name], inputs)
+        keys[name] = key_of(prov[name])
+    return _Plan(pipeline, stages, prov, keys, order, graph)
+
+
+@dataclass
+class RunResult(Mapping):
+    """Outputs of a run, loaded from the store on access: ``result["node"]`` is that node's Dataset."""
+
+    store: Store
+    keys: dict[str, str]
+    executed: list[str] = field(default_factory=list)
+    cached: list[str] = field(default_factory=list)
+    _memo: dict[str, xr.Dataset] = field(default_factory=dict, repr=False)
+
+    def __getitem__(self, node: str) -> xr.Dataset:
+        if node not in self.keys:
+            raise KeyError(f"node {node!r} was not part of this run; available: {sorted(self.keys)}")
+        if node not in self._memo:
+            self._memo[node] = self.store.load(self.keys[node])
+        return self._memo[node]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.keys)
+
+    def __len__(self) -> int:
+        return len(self.keys)
+
+
+def _selected(pipeline: Pipeline, until: Iterable[str] | str | None, only: Iterable[str] | str | None) -> set[str]:
+    if isinstance(until, str):
+        until = [until]
+    if isinstance(only, str):
+        only = [only]
+    if until and only:
+        raise PipelineError("use either until or only, not both")
+    if only:
+        for n in only:
+            pipeline._node(n)
+        return set(only)
+    if until:
+        return pipeline.upstream_of(until)
+    return set(pipeline.nodes)
+
+
+def _execute(stage: Stage, ctx: StageContext, inputs: dict[str, xr.Dataset]) -> tuple[xr.Dataset, float]:
+    """Run one stage (in whatever process joblib chose) and return its output and wall time."""
+    t0 = time.perf_counter()
+    out = stage.run(ctx, **inputs)
+    return out, time.perf_counter() - t0
+
+
+@contextlib.contextmanager
+def _backend_context(backend: str, scheduler: str | None) -> Iterator[None]:
+    if backend != "dask":
+        yield
+        return
+    if not scheduler:
+        raise PipelineError("backend 'dask' needs a scheduler address (e.g. --scheduler tcp://127.0.0.1:8786)")
+    from distributed import Client
+    from joblib import parallel_config
+
+    with Client(scheduler) as _client, parallel_config(backend="dask"):
+        yield
+
+
+def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, backend: str = "loky",
+        scheduler: str | None = None, until: Iterable[str] | str | None = None,
+        only: Iterable[str] | str | None = None, force: Iterable[str] | str = (), verbose: bool = False) -> RunResult:
+    """Run ``pipeline`` and return its results (a mapping node -> Dataset).
+
+    Parameters
+    ----------
+    cache: directory of the result store.
+    jobs: worker budget (nodes side by side, or a lone node's inner parallelism).
+    backend: ``loky`` (processes, default), ``threads`` or ``dask`` (with ``scheduler`` = address).
+    until: run only these nodes and their ancestors.
+    only: run only these nodes; their inputs must already be in the cache.
+    force: recompute these nodes and everything downstream of them even if cached.
+    """
+    if backend not in BACKENDS:
+        raise PipelineError(f"backend must be one of {sorted(BACKENDS)}, got {backend!r}")
+    if not isinstance(jobs, int) or jobs < 1:
+        raise PipelineError(f"jobs must be an integer >= 1, got {jobs!r}")
+    plan = _plan(pipeline)
+    store = Store(cache)
+    selected = _selected(pipeline, until, only)
+    forced = pipeline.downstream_of([force] if isinstance(force, str) else force) & selected
+    order = [n for n in plan.order if n in selected]
+
+    to_run: list[str] = []
+    result = RunResult(store, {n: plan.keys[n] for n in order})
+    for name in order:
+        key = plan.keys[name]
+        if name in forced:
+            store.discard(key)
+        elif store.has(key):
+            if store.verify(key):
+                result.cached.append(name)
+                store.update_manifest(pipeline.name, name, plan.prov[name])
+                continue
+            warnings.warn(
+                f"cache entry {key[:12]} of node {name!r} failed its checksum; discarding and recomputing",
+                CacheIntegrityWarning, stacklevel=2,
+            )
+            store.discard(key)
+        to_run.append(name)
+
+    if only:
+        for name in to_run:
+            for port, up in pipeline.nodes[name].inputs.items():
+                if up not in selected and not store.verify(plan.keys[up]):
+                    raise PipelineError(
+                        f"--only {name!r}: its input {port!r} (node {up!r}) is not in the cache; run without only first"
+                    )
+
+    memory: dict[str, xr.Dataset] = {}
+
+    def inputs_of(name: str) -> dict[str, xr.Dataset]:
+        out = {}
+        for port, up in pipeline.nodes[name].inputs.items():
+            if up not in memory:
+                memory[up] = store.load(plan.keys[up])
+            out[port] = memory[up]
+        return out
+
+    def finish(name: str, out: Any, seconds: float) -> None:
+        stage = plan.stages[name]
+        if not isinstance(out, xr.Dataset):
+            raise StageError(name, stage.name, f"run() must return an xarray.Dataset, returned {type(out).__name__}")
+        if stage.output is not None:
+            stage.output.validate(out, stage=stage.name, port="output")
+        meta = dict(plan.prov[name], node=name, pipeline=pipeline.name, seconds=round(seconds, 6))
+        store.save(plan.keys[name], out, meta, where=f"stage {stage.name!r} output")
+        store.update_manifest(pipeline.name, name, plan.prov[name])
+        memory[name] = out
+        result.executed.append(name)
+        if verbose:
+            print(f"[spflow] {name}: ran {stage.name} in {seconds:.2f} s", file=sys.stderr)
+
+    def prepare(name: str) -> dict[str, xr.Dataset]:
+        stage = plan.stages[name]
+        inputs = inputs_of(name)
+        for port, ds in inputs.items():
+            schema = stage.inputs.get(port)
+            if schema is not None:
+                schema.validate(ds, stage=stage.name, port=port)
+        return inputs
+
+    sub = plan.graph.subgraph(to_run)
+    jb_backend = BACKENDS[backend]
+    with _backend_context(backend, scheduler):
+        for generation in nx.topological_generations(sub):
+            generation = sorted(generation)
+            if jobs > 1 and len(generation) > 1:
+                _run_parallel(generation, plan, prepare, finish, jobs, jb_backend, verbose)
+            else:
+                for name in generation:
+                    ctx = StageContext(name, n_jobs=jobs, backend=jb_backend, verbose=verbose)
+                    inputs = prepare(name)
+                    try:
+                        out, seconds = _execute(plan.stages[name], ctx, inputs)
+                    except Exception as exc:
+                        raise StageError(name, plan.stages[name].name, f"{type(exc).__name__}: {exc}") from exc
+                    finish(name, out, seconds)
+    return result
+
+
+def _run_parallel(generation, plan, prepare, finish, jobs, jb_backend, verbose) -> None:
+    from joblib import Parallel, delayed, parallel_config
+
+    n_jobs = -1 if jb_backend == "dask" else min(jobs, len(generation))
+    tasks = []
+    for name in generation:
+        ctx = StageContext(name, n_jobs=1, backend=jb_backend, verbose=verbose)
+        tasks.append(delayed(_tagged_execute)(name, plan.stages[name], ctx, prepare(name)))
+    extra = {"inner_max_num_threads": 1} if jb_backend == "loky" else {}
+    with parallel_config(backend=jb_backend, **extra):
+        outputs = Parallel(n_jobs=n_jobs, return_as="generator_unordered")(tasks)
+        failures = []
+        for name, out, seconds, error in outputs:
+            if error is None:
+                finish(name, out, seconds)
+            else:
+                failures.append((name, error))
+    if failures:  # raised once every sibling has finished and been stored
+        name, (exc, message) = min(failures)
+        raise StageError(name, plan.stages[name].name, message) from exc
+
+
+def _tagged_execute(name: str, stage: Stage, ctx: StageContext, inputs: dict[str, xr.Dataset]):
+    """Worker-side wrapper: return errors as values so that finished siblings are still stored."""
+    try:
+        out, seconds = _execute(stage, ctx, inputs)
+        return name, out, seconds, None
+    except Exception as exc:
+        return name, None, 0.0, (exc, f"{type(exc).__name__}: {exc}")
+
+
+@dataclass
+class NodeStatus:
+    """Whether a node's current key is in the store, and if not, why it is stale."""
+
+    node: str
+    stage: str
+    key: str
+    fresh: bool
+    reasons: list[str]
+
+
+def status(pipeline: Pipeline, *, cache: str | Path = ".spflow") -> list[NodeStatus]:
+    """For each node (in topological order): fresh (its key is cached) or stale with the causes."""
+    plan = _plan(pipeline)
+    store = Store(cache)
+    manifest = store.manifest(pipeline.name)
+    out = []
+    for name in plan.order:
+        key = plan.keys[name]
+        if store.verify(key):
+            out.append(NodeStatus(name, plan.stages[name].name, key, True, []))
+            continue
+        upstream = dict(pipeline.nodes[name].inputs)
+        reasons = stale_reasons(manifest.get(name), plan.prov[name], upstream)
+        if store.has(key):
+            reasons = ["cache entry fails its checksum"]
+        out.append(NodeStatus(name, plan.stages[name].name, key, False, reasons))
+    return out

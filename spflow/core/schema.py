@@ -1,0 +1,97 @@
+"""Declared schemas for the xarray Datasets that flow between stages.
+
+A schema lists the dimensions a Dataset must have and, per variable, its dimensions, dtype kind and unit
+(``attrs["units"]``). The executor validates every stage input before ``run`` and every output before it is
+stored; a violation raises :class:`~spflow.core.errors.SchemaError` naming the stage, the port, the variable and what
+was expected versus found.
+
+We keep this small module instead of ``pandera.xarray``: our contract needs only dims, dtype kinds and units, and we
+want every message to carry the stage and port.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .errors import SchemaError
+
+__all__ = ["Variable", "DatasetSchema", "ANY"]
+
+#: Placeholder for "any Dataset" (used by generic stages such as data loaders).
+ANY = None
+
+_KIND_NAMES = {"f": "float", "i": "integer", "u": "unsigned integer", "b": "bool", "U": "string", "O": "object"}
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One variable of a Dataset schema.
+
+    ``dims`` is the exact tuple of dimension names (``None`` = any). ``kind`` is a numpy dtype-kind string
+    (``"f"`` float, ``"i"`` integer, ``"fi"`` either, ``"U"`` string …). ``units`` is the required
+    ``attrs["units"]`` (``None`` = not checked; ``""`` = must be present, any value). ``required=False`` makes the
+    variable optional, but when present it must match. Float variables must be finite unless ``allow_nan``.
+    """
+
+    dims: tuple[str, ...] | None
+    kind: str = "f"
+    units: str | None = None
+    required: bool = True
+    allow_nan: bool = False
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class DatasetSchema:
+    """Schema of a Dataset: required dims, variables (data variables or coordinates) and required attrs."""
+
+    dims: tuple[str, ...] = ()
+    variables: dict[str, Variable] = field(default_factory=dict)
+    attrs: tuple[str, ...] = ()
+    doc: str = ""
+
+    def validate(self, ds: Any, *, stage: str, port: str) -> None:
+        where = f"stage {stage!r} port {port!r}"
+        if not isinstance(ds, xr.Dataset):
+            raise SchemaError(f"{where}: expected an xarray.Dataset, found {type(ds).__name__}")
+        missing_dims = [d for d in self.dims if d not in ds.dims]
+        if missing_dims:
+            raise SchemaError(f"{where}: expected dims {list(self.dims)}, found {list(ds.dims)} (missing {missing_dims})")
+        for name in self.attrs:
+            if name not in ds.attrs:
+                raise SchemaError(f"{where}: expected Dataset attribute {name!r}, found attrs {sorted(ds.attrs)}")
+        for name, spec in self.variables.items():
+            if name not in ds.variables:
+                if spec.required:
+                    raise SchemaError(
+                        f"{where} variable {name!r}: expected a variable with dims {spec.dims}, "
+                        f"found none (variables: {sorted(map(str, ds.variables))})"
+                    )
+                continue
+            var = ds[name]
+            if spec.dims is not None and tuple(var.dims) != tuple(spec.dims):
+                raise SchemaError(f"{where} variable {name!r}: expected dims {spec.dims}, found {tuple(var.dims)}")
+            if var.dtype.kind not in spec.kind:
+                expected = " or ".join(_KIND_NAMES.get(k, k) for k in spec.kind)
+                raise SchemaError(f"{where} variable {name!r}: expected dtype {expected}, found {var.dtype}")
+            if spec.units is not None:
+                found = var.attrs.get("units")
+                if found is None:
+                    raise SchemaError(f"{where} variable {name!r}: expected attrs['units'] = {spec.units!r}, found no units")
+                if spec.units and found != spec.units:
+                    raise SchemaError(f"{where} variable {name!r}: expected units {spec.units!r}, found {found!r}")
+            if var.dtype.kind == "f" and not spec.allow_nan and not np.isfinite(var.values).all():
+                raise SchemaError(f"{where} variable {name!r}: expected finite values, found NaN or inf")
+
+    def describe(self) -> str:
+        """One line per variable, for ``spflow list``."""
+        lines = [f"dims {list(self.dims)}"] if self.dims else []
+        for name, spec in self.variables.items():
+            unit = f" [{spec.units}]" if spec.units else ""
+            opt = "" if spec.required else " (optional)"
+            lines.append(f"{name}{tuple(spec.dims) if spec.dims is not None else ''}{unit}{opt}")
+        return "; ".join(lines)
