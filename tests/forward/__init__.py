@@ -1,0 +1,1 @@
+"""Tests of the forward model (spflow.plugins.forward)."""
