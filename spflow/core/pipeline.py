@@ -100,23 +100,21 @@ class Pipeline:
         """Nodes in a deterministic topological order."""
         return list(nx.lexicographical_topological_sort(self.graph()))
 
-    def upstream_of(self, nodes: Iterable[str]) -> set[str]:
-        """The given nodes and all their ancestors (Kedro's ``to_nodes`` slice)."""
+    def _closure(self, nodes: Iterable[str], relatives) -> set[str]:
         g = self.graph()
         out: set[str] = set()
         for n in nodes:
             self._node(n)
-            out |= nx.ancestors(g, n) | {n}
+            out |= relatives(g, n) | {n}
         return out
+
+    def upstream_of(self, nodes: Iterable[str]) -> set[str]:
+        """The given nodes and all their ancestors (Kedro's ``to_nodes`` slice)."""
+        return self._closure(nodes, nx.ancestors)
 
     def downstream_of(self, nodes: Iterable[str]) -> set[str]:
         """The given nodes and all their descendants (Kedro's ``from_nodes`` slice)."""
-        g = self.graph()
-        out: set[str] = set()
-        for n in nodes:
-            self._node(n)
-            out |= nx.descendants(g, n) | {n}
-        return out
+        return self._closure(nodes, nx.descendants)
 
     def __repr__(self) -> str:
         parts = [f"{n.name}={n.stage}" + (f"<-{n.inputs}" if n.inputs else "") for n in self.nodes.values()]
