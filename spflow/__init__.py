@@ -25,6 +25,7 @@ from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry, register_plugin, reset_registry, unregister_plugin
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.forward.simulate import simulate
 
 try:
     __version__ = version("spflow")
@@ -54,6 +55,7 @@ __all__ = [
     "register_plugin",
     "reset_registry",
     "run",
+    "simulate",
     "status",
     "unregister_plugin",
 ]

@@ -8,5 +8,17 @@ from spflow.core.hookspecs import hookimpl
 @hookimpl
 def spflow_register_stages(register):
     from spflow.plugins.data import LoadNetCDF
+    from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
+    from spflow.plugins.design.parameter_space import ParameterSpace
+    from spflow.plugins.forward.stage import Forward
+    from spflow.plugins.statistics.quantiles import Quantiles
 
-    register(LoadNetCDF)
+    for stage in (LoadNetCDF, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles):
+        register(stage)
+
+
+@hookimpl
+def spflow_register_effects(register):
+    from spflow.plugins.forward.effects import register_builtin_effects
+
+    register_builtin_effects(register)

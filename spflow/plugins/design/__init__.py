@@ -1,0 +1,1 @@
+"""Parameter spaces and experimental designs (Latin hypercube) over forward-model parameters."""

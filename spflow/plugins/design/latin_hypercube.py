@@ -1,0 +1,33 @@
+"""The ``lhs_design`` stage: a Latin hypercube design (scipy.stats.qmc) scaled to a parameter space's bounds."""
+
+from __future__ import annotations
+
+import xarray as xr
+from scipy.stats import qmc
+
+from spflow.core.params import Param
+from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.schemas import DESIGN, SPACE
+
+
+class LatinHypercubeDesign(Stage):
+    name = "lhs_design"
+    description = "Latin hypercube sample of a parameter space"
+    inputs = {"space": SPACE}
+    output = DESIGN
+    params = {
+        "samples": Param(int, 100, bounds=(1, 10_000_000), doc="number of design points"),
+        "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="random seed"),
+        "optimization": Param(str, "none", choices=["none", "random-cd", "lloyd"], doc="scipy LHS optimisation"),
+    }
+
+    def run(self, ctx: StageContext, space: xr.Dataset) -> xr.Dataset:
+        opt = None if self.params["optimization"] == "none" else self.params["optimization"]
+        sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"], optimization=opt)
+        unit = sampler.random(self.params["samples"])
+        values = qmc.scale(unit, space["lower"].values, space["upper"].values)
+        return xr.Dataset(
+            {"values": (("sample", "param"), values, {"units": "per-parameter (see space unit)"})},
+            coords={"sample": range(self.params["samples"]), "param": space["param"].values},
+            attrs={"design": "latin hypercube", "seed": self.params["seed"]},
+        )

@@ -1,0 +1,37 @@
+"""The ``quantiles`` stage: ensemble quantiles and mean over the ``sample`` dimension (prior/posterior spread)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import xarray as xr
+
+from spflow.core.params import Param
+from spflow.core.schema import DatasetSchema
+from spflow.core.stage import Stage, StageContext
+
+
+class Quantiles(Stage):
+    name = "quantiles"
+    description = "quantiles and mean of every variable over the sample dimension"
+    inputs = {"ensemble": DatasetSchema(dims=("sample",))}
+    output = DatasetSchema(dims=("quantile",))
+    params = {"levels": Param(list, [0.1, 0.5, 0.9], bounds=(0.0, 1.0), doc="quantile levels in [0, 1]")}
+
+    def run(self, ctx: StageContext, ensemble: xr.Dataset) -> xr.Dataset:
+        varying = [v for v in ensemble.data_vars if "sample" in ensemble[v].dims]
+        sub = ensemble[varying]
+        with warnings.catch_warnings():  # NaN padding past an experiment's end is all-NaN across samples
+            warnings.simplefilter("ignore", RuntimeWarning)
+            out = sub.quantile(np.asarray(self.params["levels"], dtype=float), dim="sample")
+        mean = sub.mean("sample")
+        for v in varying:
+            out[f"{v}_mean"] = mean[v]
+            out[v].attrs = dict(ensemble[v].attrs)
+            out[f"{v}_mean"].attrs = dict(ensemble[v].attrs)
+        for v in ensemble.data_vars:
+            if v not in varying:
+                out[v] = ensemble[v]
+        out.attrs = dict(ensemble.attrs, ensemble_size=ensemble.sizes["sample"])
+        return out
