@@ -26,6 +26,8 @@ from spflow.core.plugins import get_registry, register_plugin, reset_registry, u
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.forward.simulate import simulate
+from spflow.io import load_coreflood
+from spflow import synthetic
 
 try:
     __version__ = version("spflow")
@@ -52,10 +54,12 @@ __all__ = [
     "canonical_hash",
     "get_registry",
     "hookimpl",
+    "load_coreflood",
     "register_plugin",
     "reset_registry",
     "run",
     "simulate",
     "status",
+    "synthetic",
     "unregister_plugin",
 ]
