@@ -1,8 +1,9 @@
-"""Main job (until the calibration pipelines land): the prior spread of the BCF1–3 corefloods.
+"""Main job (until the calibration pipelines land): the prior spread of the BCF1–3 corefloods against the bundled data.
 
 Latin-hypercube samples of the thesis's reduced parameter space (Table 3.2 ranges) are run through the forward model
-for the three bundled injection schedules (Table 2.5); the report draws the P10–P90 band and median of pressure drop,
-oil cut and cumulative recovery per experiment (cf. thesis Figs. 2.11–2.13).
+for the three bundled injection schedules (Table 2.5); the bundled lab-like measurements enter through content-hashed
+``load_netcdf`` nodes. The report draws the P10–P90 band and median of pressure drop, oil cut and cumulative recovery
+per experiment with the measurements on top (cf. thesis Figs. 2.11–2.13).
 
     spflow run prior_spread --jobs 2
 """
@@ -12,6 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import spflow
+from spflow import datasets
 
 #: Table 3.2 ranges in UTCHEM names (alpha_V2, C33max0, C33max1, ad31, gamma_1/2, c_rk, n_high, n_low, alpha_L1).
 TABLE_3_2 = {
@@ -33,6 +35,8 @@ def pipeline(samples: int = 32) -> spflow.Pipeline:
     p.add("design", "lhs_design", inputs={"space": "space"}, params={"samples": samples, "seed": 2024})
     p.add("responses", "forward", inputs={"design": "design"}, params={"experiments": ["BCF1", "BCF2", "BCF3"]})
     p.add("spread", "quantiles", inputs={"ensemble": "responses"}, params={"levels": [0.1, 0.5, 0.9]})
+    for name in datasets.names():
+        p.add(f"observed_{name}", "load_netcdf", params={"path": str(datasets.path(name))})
     return p
 
 
@@ -56,6 +60,8 @@ def report(result: spflow.RunResult, outdir: Path) -> list[str]:
             lo, mid, hi = (sel[name].sel(quantile=q) * scale for q in (0.1, 0.5, 0.9))
             ax.fill_between(sel["pv"], lo, hi, alpha=0.3, label="P10–P90")
             ax.plot(sel["pv"], mid, lw=1.5, label="median")
+            obs = result[f"observed_{exp}"][name]
+            ax.plot(obs[obs.dims[0]], obs * scale, ".", ms=3, color="k", label="bundled data")
             ax.set_ylabel(label)
             if i == 0:
                 ax.set_title(exp)

@@ -15,6 +15,7 @@ from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN
+from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.schedule import BCF_SCHEDULES, as_schedule
 from spflow.plugins.forward.simulate import simulate
@@ -60,6 +61,11 @@ class Forward(Stage):
         "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="output grid spacing"),
         "scheme": Param(str, "tvd", choices=["tvd", "upwind"], doc="transport scheme"),
     }
+
+    @classmethod
+    def code_fingerprint(cls) -> str:
+        """The stage's source plus every source file of the simulator, so that any physics edit reruns the node."""
+        return f"{super().code_fingerprint()}-{source_digest()[:16]}"
 
     def _rows(self, design: xr.Dataset | None) -> list[dict[str, float]]:
         if design is None:
