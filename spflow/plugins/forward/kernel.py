@@ -1,0 +1,278 @@
+"""The compiled IMPES time loop: one ``@njit`` function running a whole coreflood on preallocated arrays.
+
+Per step (all in pore-volume units, see ``transport``):
+
+1. local physics of every cell from the conserved state (``cell_properties``: adsorption, flash, viscosities, IFT,
+   trapping, mobilities);
+2. records: effluent averages over the elapsed output interval, pressure drop and profiles, when the time has landed
+   on an output or profile time;
+3. pressure: incompressible flow at a constant injection rate with the producer at constant pressure makes the
+   total Darcy velocity uniform, so the implicit pressure equation reduces to the integral of ``u / (k lambda_T)``
+   over the cells (plus the capillary term when Pc is on) -- ``transport.pressure_profile``;
+4. time step: ``dt = cfl / (max_i speed_i / dx + 2 max_i D_cap,i / dx^2)`` (advective CFL from the local wave-speed
+   bound and, with Pc, the explicit capillary-diffusion limit), shortened to land exactly on slug ends and output
+   times;
+5. explicit conservative update of the six components with the TVD (or upwind) fluxes; a step that would make a
+   saturation or concentration negative beyond round-off is retried with half the step, and fails as a time-step
+   collapse after 60 halvings;
+6. backward-Euler dispersion of surfactant, polymer, anions and divalent cations (operator split, conservative).
+
+Returns ``(status, info, n_steps, series, profiles, totals)``; ``status`` is a ``state_layout`` error code and
+``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell. ``totals[4, 6]`` holds, per component, the
+amount in place at the start, injected, produced and in place at the end (PV units), for the mass balance.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import kernel_inputs as K
+from . import state_layout as L
+from . import transport as T
+from .cell_properties import cell_properties
+
+# series rows
+DP, OIL_CUT, RECOVERY, CP_OUT, CS_OUT, SAL_OUT = range(6)
+N_SERIES = 6
+# profile rows
+P_SW, P_SO, P_SME, P_CP, P_CS, P_SAL, P_PRES, P_ADS3, P_ADS4, P_OIL, P_IFT = range(11)
+N_PROFILE = 11
+N_INFO = 12
+
+NEG_TOL = 1.0e-10
+MAX_HALVINGS = 60
+
+
+@njit(cache=True, error_model="numpy")
+def _properties(st, pr, prm, n, dt_s, info, t):
+    for i in range(n):
+        code = cell_properties(i, st, pr, prm, dt_s)
+        if code != L.OK:
+            _fill_info(info, t, i, st, pr, 0.0)
+            return code
+    return L.OK
+
+
+@njit(cache=True, error_model="numpy")
+def _fill_info(info, t, i, st, pr, dt):
+    info[0] = t
+    info[1] = i
+    for r in range(6):
+        info[2 + r] = st[r, i]
+    for l in range(3):
+        info[8 + l] = pr[L.S1 + l, i]
+    info[11] = dt
+
+
+@njit(cache=True, error_model="numpy")
+def _record_profile(st, pr, prm, n, prof, kp, press):
+    T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
+    for i in range(n):
+        prof[P_SW, kp, i] = pr[L.S1, i]
+        prof[P_SO, kp, i] = pr[L.S1 + 1, i]
+        prof[P_SME, kp, i] = pr[L.S1 + 2, i]
+        prof[P_CP, kp, i] = pr[L.CP, i]
+        prof[P_CS, kp, i] = st[L.M3, i] - st[L.A3, i]
+        prof[P_SAL, kp, i] = pr[L.C5, i]
+        prof[P_PRES, kp, i] = press[i]
+        prof[P_ADS3, kp, i] = st[L.A3, i]
+        prof[P_ADS4, kp, i] = st[L.A4, i]
+        prof[P_OIL, kp, i] = st[L.M2, i]
+        prof[P_IFT, kp, i] = pr[L.IFT, i]
+
+
+@njit(cache=True, error_model="numpy")
+def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
+    """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
+    ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
+    profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number."""
+    n_out = out_pv.shape[0]
+    n_prof = prof_pv.shape[0]
+    n_slug = end_pv.shape[0]
+    t_end = end_pv[n_slug - 1]
+    dx = 1.0 / n
+    st = np.zeros((L.NST, n))
+    pr = np.zeros((L.NPR, n))
+    flux = np.zeros((T.NFLUX, n + 1))
+    new = np.zeros((6, n))
+    jd = np.zeros(n + 1)
+    work_c = np.zeros(n)
+    work_d = np.zeros(n)
+    stor = np.zeros(n)
+    stor_w = np.zeros(n)
+    stor_s = np.full(n, prm[K.EPHI3])
+    conc = np.zeros(n)
+    press = np.zeros(n)
+    series = np.zeros((N_SERIES, n_out))
+    prof = np.zeros((N_PROFILE, n_prof, n))
+    totals = np.zeros((4, 6))
+    info = np.zeros(N_INFO)
+    acc = np.zeros(6)
+
+    swi = prm[K.SWI]
+    for i in range(n):
+        st[L.M1, i] = swi
+        st[L.M2, i] = 1.0 - swi
+        st[L.M5, i] = swi * prm[K.C50]
+        st[L.M6, i] = swi * prm[K.C60]
+        st[L.RK, i] = 1.0
+    for r in range(6):
+        for i in range(n):
+            totals[0, r] += st[r, i] * dx
+    ooip = (1.0 - swi)
+    dispersion = prm[K.ALPHA_D] + prm[K.ALPHA_D + 1] + prm[K.ALPHA_D + 2] + prm[K.DMOL] > 0.0
+    k_over_ul = prm[K.PERM_M2] / (prm[K.UT] * prm[K.LENGTH])
+
+    t = 0.0
+    t_last = 0.0
+    k_out = 0
+    k_prof = 0
+    slug = 0
+    steps = 0
+    dt_s = 0.0
+    acc_c = 0.0
+    cum_oil = 0.0
+    # the first pass sets the lagged trapping and shear inputs (k|grad p|, carrier flux) of the initial state
+    status = _properties(st, pr, prm, n, 0.0, info, t)
+    while status == L.OK:
+        status = _properties(st, pr, prm, n, dt_s, info, t)
+        if status != L.OK:
+            break
+        # ---- records at the landed time
+        while k_out < n_out and t >= out_pv[k_out]:
+            series[DP, k_out] = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
+            series[RECOVERY, k_out] = cum_oil / ooip if ooip > 0.0 else 0.0
+            span = t - t_last
+            if k_out == 0 or span <= 0.0:
+                T.advective_fluxes(pr, n, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, flux)
+                series[OIL_CUT, k_out] = flux[T.FO, n]
+                series[CS_OUT, k_out] = flux[T.FS, n]
+                series[CP_OUT, k_out] = pr[L.CP, n - 1] if pr[L.PCX, n - 1] > 0.0 else 0.0
+                series[SAL_OUT, k_out] = pr[L.C5, n - 1]
+            else:
+                series[OIL_CUT, k_out] = acc[T.FO] / span
+                series[CS_OUT, k_out] = acc[T.FS] / span
+                series[CP_OUT, k_out] = acc[T.FP] / acc_c if acc_c > 0.0 else 0.0
+                series[SAL_OUT, k_out] = acc[T.FA] / acc[T.FW] if acc[T.FW] > 0.0 else pr[L.C5, n - 1]
+            for r in range(6):
+                acc[r] = 0.0
+            acc_c = 0.0
+            t_last = t
+            k_out += 1
+        while k_prof < n_prof and t >= prof_pv[k_prof]:
+            _record_profile(st, pr, prm, n, prof, k_prof, press)
+            k_prof += 1
+        if t >= t_end:
+            break
+
+        # ---- time step
+        while slug < n_slug - 1 and t >= end_pv[slug]:
+            slug += 1
+        smax = 0.0
+        dmax = 0.0
+        for i in range(n):
+            if pr[L.SPEED, i] > smax:
+                smax = pr[L.SPEED, i]
+            if pr[L.DCAP, i] > dmax:
+                dmax = pr[L.DCAP, i]
+        next_stop = end_pv[slug]
+        if k_out < n_out and out_pv[k_out] < next_stop:
+            next_stop = out_pv[k_out]
+        if k_prof < n_prof and prof_pv[k_prof] < next_stop:
+            next_stop = prof_pv[k_prof]
+        remaining = next_stop - t
+        rate = smax / dx + 2.0 * dmax / (dx * dx)
+        dt = cfl / rate if rate > 0.0 else remaining
+        land = False
+        if dt >= remaining:
+            dt = remaining
+            land = True
+        elif dt > 0.5 * remaining:
+            dt = 0.5 * remaining
+
+        # ---- fluxes and explicit update, halving the step until no component goes negative
+        bad = -1
+        for _ in range(MAX_HALVINGS):
+            lam = dt / dx
+            T.advective_fluxes(pr, n, tvd, lam, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug], inj[1, slug],
+                               inj[2, slug], inj[3, slug], flux)
+            if prm[K.PC0] > 0.0:
+                T.capillary_fluxes(pr, n, dx, k_over_ul, flux)
+            bad = -1
+            for i in range(n):
+                for r in range(6):
+                    new[r, i] = st[r, i] - lam * (flux[r, i + 1] - flux[r, i])
+                if (new[L.M1, i] < -NEG_TOL or new[L.M2, i] < -NEG_TOL or new[L.M3, i] - st[L.A3, i] < -NEG_TOL
+                        or new[L.M4, i] - st[L.A4, i] < -NEG_TOL or new[L.M5, i] < -NEG_TOL
+                        or new[L.M6, i] < -NEG_TOL):
+                    bad = i
+                    break
+            if bad < 0:
+                break
+            dt *= 0.5
+            land = False
+        if bad >= 0:
+            _fill_info(info, t, bad, st, pr, dt)
+            status = L.ERR_COLLAPSE
+            break
+
+        # polymer storage after advection: EPHI4 x carrier saturation, scaled with the water volume
+        for i in range(n):
+            m1_old = st[L.M1, i]
+            ratio = new[L.M1, i] / m1_old if m1_old > 0.0 else 1.0
+            stor[i] = prm[K.EPHI4] * pr[L.SPC, i] * max(ratio, 0.0)
+        for r in range(6):
+            for i in range(n):
+                st[r, i] = new[r, i]
+
+        # ---- dispersion (backward Euler, conservative)
+        if dispersion:
+            lamd = dt / (dx * dx)
+            # anions and divalent cations per water volume (storage: water volume)
+            for i in range(n):
+                stor_w[i] = max(st[L.M1, i], 0.0)
+                conc[i] = st[L.M5, i] / st[L.M1, i] if st[L.M1, i] > 0.0 else 0.0
+            T.solve_dispersion(stor_w, conc, pr[L.KW], n, lamd, work_c, work_d, jd)
+            for i in range(n):
+                st[L.M5, i] -= lamd * (jd[i + 1] - jd[i])
+                conc[i] = st[L.M6, i] / st[L.M1, i] if st[L.M1, i] > 0.0 else 0.0
+            T.solve_dispersion(stor_w, conc, pr[L.KW], n, lamd, work_c, work_d, jd)
+            for i in range(n):
+                st[L.M6, i] -= lamd * (jd[i + 1] - jd[i])
+                # surfactant: overall accessible concentration, storage EPHI3
+                conc[i] = max(st[L.M3, i] - st[L.A3, i], 0.0) / prm[K.EPHI3]
+            T.solve_dispersion(stor_s, conc, pr[L.KS], n, lamd, work_c, work_d, jd)
+            for i in range(n):
+                st[L.M3, i] -= lamd * (jd[i + 1] - jd[i])
+            # polymer in its carrier phase
+            for i in range(n):
+                conc[i] = max(st[L.M4, i] - st[L.A4, i], 0.0) / stor[i] if stor[i] > 0.0 else 0.0
+            T.solve_dispersion(stor, conc, pr[L.KP], n, lamd, work_c, work_d, jd)
+            for i in range(n):
+                st[L.M4, i] -= lamd * (jd[i + 1] - jd[i])
+
+        # ---- bookkeeping
+        pcx = int(pr[L.PCX, n - 1])
+        f_c = pr[L.F1, n - 1] if pcx == 1 else (pr[L.F1 + 2, n - 1] if pcx == 3 else 0.0)
+        for r in range(6):
+            totals[1, r] += flux[r, 0] * dt
+            totals[2, r] += flux[r, n] * dt
+            acc[r] += flux[r, n] * dt
+        acc_c += f_c * dt
+        cum_oil += flux[T.FO, n] * dt
+        t = next_stop if land else t + dt
+        dt_s = dt * prm[K.T_PV]
+        steps += 1
+        for i in range(n):
+            for r in range(6):
+                if not math.isfinite(st[r, i]):
+                    _fill_info(info, t, i, st, pr, dt)
+                    status = L.ERR_NONFINITE
+            if status != L.OK:
+                break
+
+    for r in range(6):
+        for i in range(n):
+            totals[3, r] += st[r, i] * dx
+    return status, info, steps, series, prof, totals

@@ -1,0 +1,172 @@
+"""Injection schedules: slugs of brine, surfactant and polymer (thesis Table 2.5).
+
+A :class:`Schedule` is a named sequence of :class:`Slug` s injected one after the other at the constant rate QINJ.
+Concentrations are user-facing lab units (ppm); :meth:`Schedule.kernel_arrays` converts them once, through
+:mod:`spflow.plugins.forward.units`, to the kernel's units (meq/ml, volume fraction, wt %).
+
+Validation happens before any work and names the slug (index and name) and the field at fault.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from spflow.core.errors import ParameterError
+
+from . import units
+
+__all__ = ["Slug", "Schedule", "BCF_SCHEDULES", "as_schedule"]
+
+_MAX_PPM = 1.0e6
+
+
+def _check_number(where: str, field: str, value, lower: float, lower_open: bool) -> float:
+    bound = f"({lower:g}, {_MAX_PPM:g}]" if lower_open else f"[{lower:g}, {_MAX_PPM:g}]"
+    if field == "pv":
+        bound = f"({lower:g}, inf)"
+    if isinstance(value, bool):
+        raise ParameterError(f"{where}: field {field!r} must be a number, got {value!r}; allowed {bound}")
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{where}: field {field!r} must be a number, got {value!r}; allowed {bound}") from None
+    if not math.isfinite(x):
+        raise ParameterError(f"{where}: field {field!r} is {x!r} (must be finite); allowed {bound}")
+    too_low = x <= lower if lower_open else x < lower
+    too_high = field != "pv" and x > _MAX_PPM
+    if too_low or too_high:
+        raise ParameterError(f"{where}: field {field!r} = {x!r} is out of range; allowed {bound}")
+    return x
+
+
+@dataclass(frozen=True)
+class Slug:
+    """One injected slug: size in pore volumes and concentrations in ppm (TDS, surfactant, polymer)."""
+
+    name: str
+    pv: float
+    salinity_ppm: float
+    surfactant_ppm: float = 0.0
+    polymer_ppm: float = 0.0
+
+    def validated(self, index: int) -> Slug:
+        """A copy with float fields, or ``ParameterError`` naming slug ``index``/``name`` and the field."""
+        where = f"slug {index} ({self.name!r})"
+        if not isinstance(self.name, str) or not self.name:
+            raise ParameterError(f"slug {index}: field 'name' must be a non-empty string, got {self.name!r}")
+        return Slug(
+            name=self.name,
+            pv=_check_number(where, "pv", self.pv, 0.0, True),
+            salinity_ppm=_check_number(where, "salinity_ppm", self.salinity_ppm, 0.0, False),
+            surfactant_ppm=_check_number(where, "surfactant_ppm", self.surfactant_ppm, 0.0, False),
+            polymer_ppm=_check_number(where, "polymer_ppm", self.polymer_ppm, 0.0, False),
+        )
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A named, non-empty sequence of slugs (validated on construction)."""
+
+    slugs: tuple[Slug, ...]
+    name: str = "custom"
+
+    def __post_init__(self):
+        if not isinstance(self.slugs, (tuple, list)) or len(self.slugs) == 0:
+            raise ParameterError(f"schedule {self.name!r} is empty: it needs at least one slug with pv > 0")
+        checked = []
+        for i, slug in enumerate(self.slugs):
+            if not isinstance(slug, Slug):
+                raise ParameterError(f"slug {i} of schedule {self.name!r} must be a Slug, got {type(slug).__name__}")
+            checked.append(slug.validated(i))
+        object.__setattr__(self, "slugs", tuple(checked))
+
+    @property
+    def total_pv(self) -> float:
+        """Total injected pore volumes."""
+        return float(math.fsum(s.pv for s in self.slugs))
+
+    def kernel_arrays(self) -> dict[str, np.ndarray]:
+        """Per-slug arrays in kernel units: cumulative end PV, surfactant vol. frac., polymer wt %, anions and
+        divalent cations in meq/ml."""
+        ends = np.cumsum([s.pv for s in self.slugs], dtype=np.float64)
+        return {
+            "end_pv": ends,
+            "c3": np.array([units.surfactant_ppm_to_volume_fraction(s.surfactant_ppm) for s in self.slugs]),
+            "c4": np.array([units.polymer_ppm_to_wt_percent(s.polymer_ppm) for s in self.slugs]),
+            "c5": np.array([units.tds_ppm_to_anions(s.salinity_ppm) for s in self.slugs]),
+            "c6": np.array([units.tds_ppm_to_divalent(s.salinity_ppm) for s in self.slugs]),
+        }
+
+
+def _bcf(name, iwf, htds, sp_pv, sp_tds, poly_ppm, p_pv, ewf):
+    slugs = [Slug("IWF", iwf, 9400.0)]
+    if htds:
+        slugs.append(Slug("HTDS", htds, 17500.0))
+    slugs += [
+        Slug("SP", sp_pv, sp_tds, 6780.0, poly_ppm),
+        Slug("P", p_pv, 9400.0, 0.0, poly_ppm),
+        Slug("EWF", ewf, 9400.0),
+    ]
+    return Schedule(tuple(slugs), name)
+
+
+#: The three Berea corefloods of thesis Table 2.5 (BCF1 has no HTDS slug).
+BCF_SCHEDULES: dict[str, Schedule] = {
+    "BCF1": _bcf("BCF1", 1.45, None, 0.50, 9400.0, 3300.0, 1.01, 1.27),
+    "BCF2": _bcf("BCF2", 1.60, 1.0, 0.25, 17500.0, 2500.0, 0.50, 1.59),
+    "BCF3": _bcf("BCF3", 1.60, 0.25, 0.25, 17500.0, 2500.0, 0.51, 1.49),
+}
+
+_SLUG_FIELDS = ("name", "pv", "salinity_ppm", "surfactant_ppm", "polymer_ppm")
+
+
+def _slug_from_mapping(i: int, m: Mapping) -> Slug:
+    unknown = sorted(set(m) - set(_SLUG_FIELDS))
+    if unknown:
+        raise ParameterError(f"slug {i}: unknown field(s) {unknown}; allowed fields {list(_SLUG_FIELDS)}")
+    for required in ("pv", "salinity_ppm"):
+        if required not in m:
+            raise ParameterError(f"slug {i}: missing field {required!r}; required fields ['pv', 'salinity_ppm']")
+    return Slug(
+        name=m.get("name", f"slug{i}"),
+        pv=m["pv"],
+        salinity_ppm=m["salinity_ppm"],
+        surfactant_ppm=m.get("surfactant_ppm", 0.0),
+        polymer_ppm=m.get("polymer_ppm", 0.0),
+    )
+
+
+def as_schedule(obj) -> Schedule:
+    """A :class:`Schedule` from a Table 2.5 name (``"BCF1"``..), a Schedule, a list of Slug/mappings, or a mapping
+    ``{"name": ..., "slugs": [...]}``. Raises ``ParameterError`` (a ``ValueError``) on anything invalid."""
+    if isinstance(obj, Schedule):
+        return obj
+    if isinstance(obj, str):
+        key = obj.strip().upper()
+        if key not in BCF_SCHEDULES:
+            raise ParameterError(f"unknown schedule name {obj!r}; known: {', '.join(BCF_SCHEDULES)}")
+        return BCF_SCHEDULES[key]
+    name = "custom"
+    slugs = obj
+    if isinstance(obj, Mapping):
+        if "slugs" not in obj:
+            raise ParameterError("a schedule mapping needs a 'slugs' list (and optionally a 'name')")
+        name = str(obj.get("name", "custom"))
+        slugs = obj["slugs"]
+    if not isinstance(slugs, Sequence) or isinstance(slugs, (str, bytes)):
+        raise ParameterError(f"schedule must be a name, a Schedule or a list of slugs, got {type(obj).__name__}")
+    if len(slugs) == 0:
+        raise ParameterError(f"schedule {name!r} is empty: it needs at least one slug with pv > 0")
+    built = []
+    for i, s in enumerate(slugs):
+        if isinstance(s, Slug):
+            built.append(s)
+        elif isinstance(s, Mapping):
+            built.append(_slug_from_mapping(i, s))
+        else:
+            raise ParameterError(f"slug {i} must be a Slug or a mapping, got {type(s).__name__}")
+    return Schedule(tuple(built), name)
