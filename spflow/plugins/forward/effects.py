@@ -140,11 +140,9 @@ class EffectRegistry:
 
 def default_registry() -> EffectRegistry:
     """A registry of the built-ins plus every effect contributed through the ``spflow_register_effects`` hook."""
+    from spflow.core.plugins import get_registry  # deferred: the plugin registry imports this module
+
     registry = EffectRegistry(BUILTIN_EFFECTS)
-    try:
-        from spflow.core.plugins import get_registry
-    except ImportError:  # core framework absent: built-ins only
-        return registry
     for name, effect in get_registry().effects.items():
         if name not in registry and isinstance(effect, Effect):
             registry.register(effect)
