@@ -18,29 +18,11 @@ import numpy as np
 from spflow.core.errors import ParameterError
 
 from . import units
+from .checks import check_number
 
 __all__ = ["Slug", "Schedule", "BCF_SCHEDULES", "as_schedule"]
 
 _MAX_PPM = 1.0e6
-
-
-def _check_number(where: str, field: str, value, lower: float, lower_open: bool) -> float:
-    bound = f"({lower:g}, {_MAX_PPM:g}]" if lower_open else f"[{lower:g}, {_MAX_PPM:g}]"
-    if field == "pv":
-        bound = f"({lower:g}, inf)"
-    if isinstance(value, bool):
-        raise ParameterError(f"{where}: field {field!r} must be a number, got {value!r}; allowed {bound}")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{where}: field {field!r} must be a number, got {value!r}; allowed {bound}") from None
-    if not math.isfinite(x):
-        raise ParameterError(f"{where}: field {field!r} is {x!r} (must be finite); allowed {bound}")
-    too_low = x <= lower if lower_open else x < lower
-    too_high = field != "pv" and x > _MAX_PPM
-    if too_low or too_high:
-        raise ParameterError(f"{where}: field {field!r} = {x!r} is out of range; allowed {bound}")
-    return x
 
 
 @dataclass(frozen=True)
@@ -60,10 +42,10 @@ class Slug:
             raise ParameterError(f"slug {index}: field 'name' must be a non-empty string, got {self.name!r}")
         return Slug(
             name=self.name,
-            pv=_check_number(where, "pv", self.pv, 0.0, True),
-            salinity_ppm=_check_number(where, "salinity_ppm", self.salinity_ppm, 0.0, False),
-            surfactant_ppm=_check_number(where, "surfactant_ppm", self.surfactant_ppm, 0.0, False),
-            polymer_ppm=_check_number(where, "polymer_ppm", self.polymer_ppm, 0.0, False),
+            pv=check_number(f"{where}: field 'pv'", self.pv, 0.0, math.inf, lower_open=True),
+            salinity_ppm=check_number(f"{where}: field 'salinity_ppm'", self.salinity_ppm, 0.0, _MAX_PPM),
+            surfactant_ppm=check_number(f"{where}: field 'surfactant_ppm'", self.surfactant_ppm, 0.0, _MAX_PPM),
+            polymer_ppm=check_number(f"{where}: field 'polymer_ppm'", self.polymer_ppm, 0.0, _MAX_PPM),
         )
 
 

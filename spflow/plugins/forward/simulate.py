@@ -17,6 +17,7 @@ from . import effects as E
 from . import state_layout as L
 from .errors import SimulationError
 from .kernel import run_kernel
+from .checks import check_number
 from .kernel_inputs import build_kernel_params
 from .outputs import build_dataset
 from .parameters import resolve_params
@@ -39,20 +40,6 @@ def output_grid(total_pv: float, pv_step: float) -> np.ndarray:
     return grid
 
 
-def _check_float(name: str, value, lower: float, upper: float, lower_open: bool = True) -> float:
-    rng = f"{'(' if lower_open else '['}{lower:g}, {upper:g}]"
-    if isinstance(value, bool):
-        raise ParameterError(f"{name} must be a number in {rng}, got {value!r}")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number in {rng}, got {value!r}") from None
-    ok = math.isfinite(x) and (x > lower if lower_open else x >= lower) and x <= upper
-    if not ok:
-        raise ParameterError(f"{name} = {value!r} is out of range; allowed {rng}")
-    return x
-
-
 def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl):
     sched = as_schedule(schedule)
     total = sched.total_pv
@@ -60,18 +47,18 @@ def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cf
         raise ParameterError(f"cells must be an integer in [3, {_MAX_CELLS}], got {cells!r}")
     if scheme not in _SCHEMES:
         raise ParameterError(f"scheme must be one of {sorted(_SCHEMES)}, got {scheme!r}")
-    pv_step = _check_float("pv_step", pv_step, 0.0, total)
+    pv_step = check_number("pv_step", pv_step, 0.0, total, lower_open=True)
     if total / pv_step > 1.0e6:
         raise ParameterError(f"pv_step = {pv_step!r} gives more than 1e6 output points; allowed [{total / 1e6:g}, "
                              f"{total:g}] PV for this schedule")
-    cfl = _check_float("cfl", cfl, 0.0, 0.5 if scheme == "tvd" else 1.0)
+    cfl = check_number("cfl", cfl, 0.0, 0.5 if scheme == "tvd" else 1.0, lower_open=True)
     if profiles_at is None:
         prof = np.zeros(0)
     else:
         values = np.atleast_1d(np.asarray(profiles_at, dtype=object))
         # tolerate the round-off of the slug sum (0.6 + 0.5 + 0.7 = 1.7999999999999998)
         limit = total * (1.0 + 1e-12)
-        prof = np.array([_check_float(f"profiles_at[{i}]", v, 0.0, limit, lower_open=False)
+        prof = np.array([check_number(f"profiles_at[{i}]", v, 0.0, limit)
                          for i, v in enumerate(values)], dtype=np.float64)
         prof = np.unique(np.minimum(prof, total))
     registry = E.default_registry()
