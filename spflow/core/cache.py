@@ -74,6 +74,8 @@ class Store:
 
     def __init__(self, root: str | os.PathLike):
         self.root = Path(root)
+        #: key -> (size, mtime_ns) of data.nc when its checksum last matched; a changed file is re-hashed.
+        self._verified: dict[str, tuple[int, int]] = {}
 
     def _entry(self, key: str) -> Path:
         return self.root / "objects" / key[:2] / key
@@ -85,12 +87,22 @@ class Store:
         return json.loads((self._entry(key) / "meta.json").read_text())
 
     def verify(self, key: str) -> bool:
-        """True if the entry exists and its data file matches the recorded checksum."""
+        """True if the entry exists and its data file matches the recorded checksum.
+
+        The file is hashed once per store object; later calls re-hash only if its size or mtime changed.
+        """
+        data = self._entry(key) / "data.nc"
         try:
-            meta = self.record(key)
-            return _file_sha256(self._entry(key) / "data.nc") == meta["sha256"]
+            st = data.stat()
+            stamp = (st.st_size, st.st_mtime_ns)
+            if self._verified.get(key) == stamp:
+                return True
+            ok = _file_sha256(data) == self.record(key)["sha256"]
         except (OSError, ValueError, KeyError):
             return False
+        if ok:
+            self._verified[key] = stamp
+        return ok
 
     def load(self, key: str) -> xr.Dataset:
         """Load an entry fully into memory; raise :class:`CorruptEntryError` if its checksum does not match."""
@@ -121,6 +133,7 @@ class Store:
                 shutil.rmtree(tmp, ignore_errors=True)
 
     def discard(self, key: str) -> None:
+        self._verified.pop(key, None)
         shutil.rmtree(self._entry(key), ignore_errors=True)
 
     # -- per-pipeline manifests (what ran last, for staleness explanations) -------------------------------------------
@@ -133,10 +146,10 @@ class Store:
         except (OSError, ValueError):
             return {}
 
-    def update_manifest(self, pipeline: str, node: str, provenance: dict[str, Any]) -> None:
-        manifest = self.manifest(pipeline)
-        manifest[node] = provenance
-        _write_json_atomic(self._manifest_path(pipeline), manifest)
+    def update_manifest(self, pipeline: str, provenances: dict[str, dict[str, Any]]) -> None:
+        """Record the provenance of these nodes' latest results (one atomic rewrite)."""
+        if provenances:
+            _write_json_atomic(self._manifest_path(pipeline), {**self.manifest(pipeline), **provenances})
 
     def clean(self, *, tmp_only: bool = False) -> int:
         """Delete the store (or only unfinished temporary entries); return the number of entries removed."""

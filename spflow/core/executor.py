@@ -179,7 +179,6 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
         elif store.has(key):
             if store.verify(key):
                 result.cached.append(name)
-                store.update_manifest(pipeline.name, name, plan.prov[name])
                 continue
             warnings.warn(
                 f"cache entry {key[:12]} of node {name!r} failed its checksum; discarding and recomputing",
@@ -187,6 +186,7 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
             )
             store.discard(key)
         to_run.append(name)
+    store.update_manifest(pipeline.name, {name: plan.prov[name] for name in result.cached})
 
     if only:
         for name in to_run:
@@ -214,7 +214,7 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
             stage.output.validate(out, stage=stage.name, port="output")
         meta = dict(plan.prov[name], node=name, pipeline=pipeline.name, seconds=round(seconds, 6))
         store.save(plan.keys[name], out, meta, where=f"stage {stage.name!r} output")
-        store.update_manifest(pipeline.name, name, plan.prov[name])
+        store.update_manifest(pipeline.name, {name: plan.prov[name]})
         memory[name] = out
         result.executed.append(name)
         if verbose:

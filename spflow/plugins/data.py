@@ -42,14 +42,17 @@ class LoadNetCDF(Stage):
     params = {"path": Param(str, doc="path of the netCDF file")}
 
     def _load(self) -> xr.Dataset:
-        path = Path(self.params["path"])
-        if not path.is_file():
-            raise ParameterError(f"stage 'load_netcdf' parameter 'path': no such file {str(path)!r}")
-        with xr.open_dataset(path) as ds:
-            return ds.load().drop_encoding()
+        """The file's content, read once per stage instance (the fingerprint and ``run`` share it)."""
+        if getattr(self, "_dataset", None) is None:
+            path = Path(self.params["path"])
+            if not path.is_file():
+                raise ParameterError(f"stage 'load_netcdf' parameter 'path': no such file {str(path)!r}")
+            with xr.open_dataset(path) as ds:
+                self._dataset = ds.load().drop_encoding()
+        return self._dataset
 
     def fingerprint(self) -> str:
         return canonical_hash(self._load())
 
     def run(self, ctx: StageContext) -> xr.Dataset:
-        return self._load()
+        return self._load().copy()

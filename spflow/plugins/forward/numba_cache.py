@@ -11,6 +11,7 @@ numba recompiles them. It only touches files inside the package's own ``__pycach
 from __future__ import annotations
 
 import hashlib
+from functools import cache
 from pathlib import Path
 
 __all__ = ["invalidate_stale_cache", "source_digest"]
@@ -19,8 +20,10 @@ _ROOT = Path(__file__).resolve().parent
 _STAMP = "spflow_forward_sources.sha256"
 
 
+@cache
 def source_digest() -> str:
-    """SHA-256 over every source file of the forward model (also keys the ``forward`` stage's results)."""
+    """SHA-256 over every source file of the forward model as loaded in this process (also keys the ``forward``
+    stage's results)."""
     h = hashlib.sha256()
     for path in sorted(_ROOT.glob("*.py")) + sorted((_ROOT / "physics").glob("*.py")):
         h.update(path.relative_to(_ROOT).as_posix().encode())
