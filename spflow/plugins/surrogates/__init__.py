@@ -1,0 +1,1 @@
+"""Surrogates (PCE, PC-Kriging, GP) behind one contract: :mod:`.contract`."""

@@ -1,0 +1,133 @@
+"""The one surrogate contract: every proxy (PCE, PC-Kriging, plain GP, third-party ones) predicts a mean and a
+variance for a batch of parameter vectors and round-trips through an xarray Dataset without pickle.
+
+A surrogate Dataset has dims ``param`` (with ``lower``/``upper`` bounds of the uniform input box) and ``output``
+(labelled by :class:`~.outputs.OutputIndex`), ``attrs["surrogate"]`` naming its kind, and whatever arrays the kind
+needs (coefficients with their multi-indices, hyperparameters, training data, errors). Stages downstream
+(calibration, design) call :func:`load_surrogate` and never care which kind they got, so a pipeline swaps the
+surrogate by naming another stage for the surrogate node.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+import numpy as np
+import xarray as xr
+
+from spflow.core.errors import ParameterError, SchemaError
+from spflow.core.schema import DatasetSchema, Variable
+
+from .outputs import OutputIndex
+
+__all__ = ["Surrogate", "SURROGATE", "register_surrogate_kind", "load_surrogate", "surrogate_kinds"]
+
+#: Schema of every stored surrogate.
+SURROGATE = DatasetSchema(
+    dims=("param", "output"),
+    variables={
+        "lower": Variable(("param",), units=None),
+        "upper": Variable(("param",), units=None),
+        "output_variable": Variable(("output",), kind="U"),
+        "output_pv": Variable(("output",), units="PV", allow_nan=True),
+    },
+    attrs=("surrogate",),
+    doc="a fitted surrogate (see attrs['surrogate'] for its kind)",
+)
+
+_KINDS: dict[str, type[Surrogate]] = {}
+
+
+class Surrogate(ABC):
+    """A fitted proxy of a vector-valued model on a uniform box ``lower <= x <= upper`` (physical units)."""
+
+    #: The name stored in ``attrs["surrogate"]``; unique per kind.
+    kind: ClassVar[str] = ""
+
+    def __init__(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex):
+        self.names = [str(n) for n in names]
+        self.lower = np.asarray(lower, dtype=float)
+        self.upper = np.asarray(upper, dtype=float)
+        self.outputs = outputs
+
+    # -- prediction -----------------------------------------------------------------------------------------------
+    def predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and variance, each (n, n_output), at ``x`` (n, n_param) in physical units."""
+        return self._predict(self.check_points(x))
+
+    @abstractmethod
+    def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Kind-specific prediction on validated points."""
+
+    def check_points(self, x: np.ndarray) -> np.ndarray:
+        """``x`` as a float (n, n_param) array; a wrong width or a non-finite value raises before any work."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        if x.ndim != 2 or x.shape[1] != len(self.names):
+            raise ParameterError(f"surrogate input: expected points of shape (n, {len(self.names)}) for parameters "
+                                 f"{self.names}, got {x.shape}")
+        if not np.isfinite(x).all():
+            raise ParameterError("surrogate input: points must be finite")
+        return x
+
+    def to_unit(self, x: np.ndarray) -> np.ndarray:
+        """Affine map of the box onto [-1, 1]^d (the auxiliary space of the Legendre basis)."""
+        return 2.0 * (x - self.lower) / (self.upper - self.lower) - 1.0
+
+    def predict_dataset(self, x: np.ndarray) -> xr.Dataset:
+        """Predictions as a Dataset with dims (``sample``, ``output``) and the output labels as coordinates."""
+        x = self.check_points(x)
+        mean, var = self._predict(x)
+        ds = xr.Dataset({"mean": (("sample", "output"), mean), "variance": (("sample", "output"), var)},
+                        coords={"sample": np.arange(x.shape[0]), **self.outputs.coords()})
+        ds.attrs = self.outputs.unit_attrs()
+        return ds
+
+    # -- storage --------------------------------------------------------------------------------------------------
+    @abstractmethod
+    def to_dataset(self) -> xr.Dataset:
+        """The surrogate as a Dataset (use :meth:`_dataset` for the common part)."""
+
+    @classmethod
+    @abstractmethod
+    def from_dataset(cls, ds: xr.Dataset) -> Surrogate:
+        """Rebuild from :meth:`to_dataset`'s output."""
+
+    def _dataset(self, variables: dict, coords: dict | None = None, attrs: dict | None = None) -> xr.Dataset:
+        ds = xr.Dataset(
+            {"lower": ("param", self.lower, {"units": "per-parameter"}),
+             "upper": ("param", self.upper, {"units": "per-parameter"}), **variables},
+            coords={"param": self.names, **self.outputs.coords(), **(coords or {})},
+        )
+        ds.attrs = {"surrogate": self.kind, **self.outputs.unit_attrs(), **(attrs or {})}
+        return ds
+
+    @staticmethod
+    def _common(ds: xr.Dataset) -> dict:
+        """Constructor arguments shared by every kind, read back from a stored Dataset."""
+        return {"names": [str(n) for n in ds["param"].values], "lower": ds["lower"].values,
+                "upper": ds["upper"].values, "outputs": OutputIndex.from_dataset(ds)}
+
+
+def register_surrogate_kind(cls: type[Surrogate]) -> type[Surrogate]:
+    """Class decorator: make ``cls`` loadable by :func:`load_surrogate` under ``cls.kind``."""
+    if not cls.kind:
+        raise TypeError(f"{cls.__name__} must set a non-empty class attribute 'kind'")
+    if _KINDS.get(cls.kind, cls) is not cls:
+        raise TypeError(f"surrogate kind {cls.kind!r} is already registered by {_KINDS[cls.kind].__name__}")
+    _KINDS[cls.kind] = cls
+    return cls
+
+
+def surrogate_kinds() -> list[str]:
+    """Names of the loadable surrogate kinds."""
+    return sorted(_KINDS)
+
+
+def load_surrogate(ds: xr.Dataset) -> Surrogate:
+    """Rebuild whichever surrogate ``ds`` holds (``attrs["surrogate"]`` picks the kind)."""
+    SURROGATE.validate(ds, stage="load_surrogate", port="surrogate")
+    kind = ds.attrs["surrogate"]
+    if kind not in _KINDS:
+        raise SchemaError(f"unknown surrogate kind {kind!r}; registered kinds: {surrogate_kinds()}")
+    return _KINDS[kind].from_dataset(ds)
