@@ -54,7 +54,7 @@ def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     fig, axes = plt.subplots(len(qois), len(experiments), figsize=(4 * len(experiments), 8), sharex="col")
     for j, exp in enumerate(experiments):
         end = float(spread["total_pv"].sel(experiment=exp))
-        sel = spread.sel(experiment=exp).sel(pv=slice(0, end))
+        sel = spread.sel(experiment=exp).sel(pv=slice(0, end)).dropna("pv", subset=["dp_mean"])
         for i, (name, scale, label) in enumerate(qois):
             ax = axes[i, j]
             lo, mid, hi = (sel[name].sel(quantile=q) * scale for q in (0.1, 0.5, 0.9))

@@ -11,9 +11,10 @@ def spflow_register_stages(register):
     from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
     from spflow.plugins.design.parameter_space import ParameterSpace
     from spflow.plugins.forward.stage import Forward
+    from spflow.plugins.observations import Observations
     from spflow.plugins.statistics.quantiles import Quantiles
 
-    for stage in (LoadNetCDF, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles):
+    for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles):
         register(stage)
 
 

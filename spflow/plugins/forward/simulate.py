@@ -23,7 +23,7 @@ from .outputs import build_dataset
 from .parameters import resolve_params
 from .schedule import as_schedule
 
-__all__ = ["simulate", "output_grid"]
+__all__ = ["simulate", "output_grid", "common_grid"]
 
 _SCHEMES = {"tvd": True, "upwind": False}
 _MAX_CELLS = 20000
@@ -38,6 +38,17 @@ def output_grid(total_pv: float, pv_step: float) -> np.ndarray:
     else:
         grid[-1] = total_pv
     return grid
+
+
+def common_grid(totals, pv_step: float) -> tuple[np.ndarray, list[np.ndarray]]:
+    """The union of several experiments' output grids and, per experiment, the positions of its own grid in it.
+
+    Experiments of different length share the step points; each one's off-step end point (e.g. 4.23 PV) is a
+    point of the union that the others leave NaN.
+    """
+    grids = [output_grid(float(t), pv_step) for t in totals]
+    union = np.unique(np.concatenate(grids))
+    return union, [np.searchsorted(union, g) for g in grids]
 
 
 def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl):

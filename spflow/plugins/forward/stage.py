@@ -1,7 +1,8 @@
 """The ``forward`` stage: run the SP coreflood simulator over a design (sample x param) and a set of experiments.
 
 Output dims (``sample``, ``experiment``, ``pv``): the response variables of :func:`simulate` on a common PV grid.
-Experiments of different total PV are padded with NaN past their end (``total_pv`` says where each ends). Samples
+Experiments of different total PV share one grid (the union of their own grids, :func:`common_grid`) and are NaN
+where a point is not theirs (past their end, or another experiment's off-step end point). Samples
 run in parallel with the node's joblib budget; the simulator is deterministic, so serial and parallel runs are
 bit-identical. Every sample's parameters are validated before any simulation starts.
 """
@@ -18,7 +19,7 @@ from spflow.plugins.design.schemas import DESIGN
 from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.schedule import BCF_SCHEDULES, as_schedule
-from spflow.plugins.forward.simulate import simulate
+from spflow.plugins.forward.simulate import common_grid, simulate
 
 #: Response variables of the simulator and their units.
 RESPONSE_UNITS = {
@@ -86,17 +87,17 @@ class Forward(Stage):
             delayed(_run_sample)(experiments, fixed, row, *args) for row in ctx.progress(rows, what="samples")
         )
         total = np.array([as_schedule(e).total_pv for e in experiments])
-        longest = runs[0][int(np.argmax(total))]["pv"].values
-        data = {name: np.full((len(rows), len(experiments), longest.size), np.nan) for name in RESPONSE_UNITS}
+        grid, positions = common_grid(total, self.params["pv_step"])
+        data = {name: np.full((len(rows), len(experiments), grid.size), np.nan) for name in RESPONSE_UNITS}
         for i, sample_runs in enumerate(runs):
             for j, ds in enumerate(sample_runs):
                 for name in RESPONSE_UNITS:
-                    data[name][i, j, : ds.sizes["pv"]] = ds[name].values
+                    data[name][i, j, positions[j]] = ds[name].values
         out = xr.Dataset(
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
             | {"total_pv": ("experiment", total, {"units": "PV"})},
-            coords={"sample": np.arange(len(rows)), "experiment": experiments, "pv": longest},
+            coords={"sample": np.arange(len(rows)), "experiment": experiments, "pv": grid},
             attrs={"cells": self.params["cells"], "scheme": self.params["scheme"]},
         )
         out["pv"].attrs["units"] = "PV"

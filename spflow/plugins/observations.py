@@ -1,0 +1,136 @@
+"""The ``observations`` stage: measured corefloods on the simulator's output grid, so a misfit is a plain difference.
+
+A lab measures on two grids (transducer points ``pv``, effluent tubes ``pv_tube``, see :mod:`spflow.io.format`);
+the simulator reports on ``0, Δ, 2Δ, ...`` (:func:`~spflow.plugins.forward.simulate.output_grid`) with the same
+sampling conventions the tubes have. Each variable is carried over with its own convention, never blindly
+interpolated:
+
+* ``dp`` (point value) — linear interpolation in the transducer series;
+* ``recovery`` (cumulative, reported at ``pv_tube_end``) — linear interpolation in ``pv_tube_end``;
+* ``oil_cut``, ``c_polymer_out``, ``c_surfactant_out``, ``salinity_out`` (tube averages) — the volume average of the
+  tubes over the simulator's interval ``(pv - Δ, pv]``, which is what the simulator reports there.
+
+Grid points the data does not cover (before the first sample, after the last tube, or intervals touching a tube
+without a value) are NaN. The output has dims (``experiment``, ``pv``) like one sample of the ``forward`` stage's
+responses, with each experiment's ``total_pv``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from spflow.core.errors import ParameterError
+from spflow.core.hashing import canonical_hash
+from spflow.core.params import Param
+from spflow.core.schema import DatasetSchema, Variable
+from spflow.core.stage import Stage, StageContext
+from spflow.io import load_coreflood
+from spflow.io.format import VARIABLES
+from spflow.plugins.forward.schedule import as_schedule
+from spflow.plugins.forward.simulate import common_grid, output_grid
+
+__all__ = ["Observations", "OBSERVATIONS", "on_simulator_grid"]
+
+_AVERAGED = ("oil_cut", "c_polymer_out", "c_surfactant_out", "salinity_out")
+_ALLOWED = ("dp", "recovery", *_AVERAGED)
+
+#: Schema of measured data on the simulator grid.
+OBSERVATIONS = DatasetSchema(
+    dims=("experiment", "pv"),
+    variables={"total_pv": Variable(("experiment",), units="PV")},
+    doc="measured corefloods on the simulator's output grid",
+)
+
+
+def _tube_average(ds: xr.Dataset, name: str, grid: np.ndarray, step: float) -> np.ndarray:
+    """Volume average of tube values over ``(pv - step, pv]`` for each grid point (NaN where not covered)."""
+    start, end = ds["pv_tube_start"].values, ds["pv_tube_end"].values
+    values = ds[name].values
+    out = np.full(grid.size, np.nan)
+    for k, pv in enumerate(grid):
+        lo = max(pv - step, 0.0)
+        if pv <= 0.0 or lo < start[0] - 1e-9 or pv > end[-1] + 1e-9:
+            continue
+        overlap = np.clip(np.minimum(end, pv) - np.maximum(start, lo), 0.0, None)
+        used = overlap > 1e-12
+        if np.isnan(values[used]).any():
+            continue
+        out[k] = float(np.sum(values[used] * overlap[used]) / np.sum(overlap[used]))
+    return out
+
+
+def _point(x: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """Linear interpolation of a point series, NaN outside its span."""
+    keep = np.isfinite(y)
+    return np.interp(grid, x[keep], y[keep], left=np.nan, right=np.nan) if keep.any() else np.full(grid.size, np.nan)
+
+
+def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, step: float) -> dict[str, np.ndarray]:
+    """Each requested variable of coreflood ``ds`` on ``grid`` (spacing ``step``), NaN where it has no data."""
+    out = {}
+    for name in variables:
+        if name not in ds:
+            out[name] = np.full(grid.size, np.nan)
+        elif name == "dp":
+            out[name] = _point(ds["pv"].values, ds["dp"].values, grid)
+        elif name == "recovery":
+            out[name] = _point(ds["pv_tube_end"].values, ds["recovery"].values, grid)
+        else:
+            out[name] = _tube_average(ds, name, grid, step)
+    return out
+
+
+class Observations(Stage):
+    name = "observations"
+    description = "measured corefloods (bundled names or files) on the simulator's output grid"
+    output = OBSERVATIONS
+    params = {
+        "experiments": Param(list, ["BCF1", "BCF2", "BCF3"],
+                             doc="bundled names (BCF1-3) or paths of coreflood files (.nc/.csv)"),
+        "variables": Param(list, ["dp", "oil_cut", "recovery"], choices=list(_ALLOWED), doc="measured variables"),
+        "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="simulator output grid spacing"),
+    }
+
+    def _load(self) -> list[xr.Dataset]:
+        """The corefloods, read once per stage instance (the fingerprint and ``run`` share them)."""
+        if getattr(self, "_data", None) is None:
+            data = []
+            for source in self.params["experiments"]:
+                try:
+                    ds = load_coreflood(source)
+                except (ValueError, OSError) as exc:
+                    raise ParameterError(f"stage 'observations' parameter 'experiments': {source!r}: {exc}") from None
+                if "schedule" not in ds.attrs:
+                    raise ParameterError(f"stage 'observations': coreflood {source!r} has no 'schedule' attr, so its "
+                                         "total PV is unknown; load it with a schedule")
+                data.append(ds)
+            self._data = data
+        return self._data
+
+    def fingerprint(self) -> str:
+        return canonical_hash(self._load())
+
+    def run(self, ctx: StageContext) -> xr.Dataset:
+        import json
+
+        data = self._load()
+        names = [str(ds.attrs["experiment"]) for ds in data]
+        if len(set(names)) != len(names):
+            raise ParameterError(f"stage 'observations': experiments must be distinct, got {names}")
+        step, variables = self.params["pv_step"], list(self.params["variables"])
+        totals = np.array([as_schedule(json.loads(ds.attrs["schedule"])).total_pv for ds in data])
+        grid, positions = common_grid(totals, step)
+        values = {name: np.full((len(data), grid.size), np.nan) for name in variables}
+        for i, ds in enumerate(data):
+            own = output_grid(float(totals[i]), step)
+            for name, series in on_simulator_grid(ds, variables, own, step).items():
+                values[name][i, positions[i]] = series
+        out = xr.Dataset(
+            {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1]}) for name, v in values.items()}
+            | {"total_pv": ("experiment", totals, {"units": "PV"})},
+            coords={"experiment": names, "pv": grid},
+            attrs={"pv_step": step, "sources": " ".join(map(str, self.params["experiments"]))},
+        )
+        out["pv"].attrs["units"] = "PV"
+        return out

@@ -1,0 +1,65 @@
+"""The ``observations`` stage puts measured corefloods on the simulator's grid with each variable's own sampling
+convention; references are computed here by hand from hand-built data and from a noise-free synthetic twin."""
+
+import numpy as np
+import pytest
+
+from spflow.core.errors import ParameterError
+from spflow.core.stage import StageContext
+from spflow.io.format import build_coreflood, schedule_json
+from spflow.plugins.observations import Observations, on_simulator_grid
+from spflow.plugins.forward.simulate import simulate
+from spflow.synthetic import NoiseModel, make_coreflood
+
+SCHEDULE = [{"pv": 0.6, "salinity_ppm": 9400.0}]
+
+
+def _handmade(tmp_path):
+    """dp = 1000 + 500 pv sampled every 0.02 PV; tubes of 0.05 PV with oil cut 0.1 k; recovery = pv_tube_end / 2."""
+    pv = np.arange(0, 0.6 + 1e-9, 0.02)
+    start = np.arange(0, 0.6 - 1e-9, 0.05)
+    end = start + 0.05
+    oil_cut = 0.1 * np.arange(start.size) / start.size
+    ds = build_coreflood(experiment="H1", source="test", pv=pv, dp=1000 + 500 * pv, tube_start=start, tube_end=end,
+                         tubes={"oil_cut": oil_cut, "recovery": end / 2},
+                         attrs={"schedule": schedule_json(SCHEDULE)})
+    path = tmp_path / "h1.nc"
+    ds.to_netcdf(path)
+    return path, oil_cut
+
+
+def test_each_variable_keeps_its_sampling_convention(tmp_path):
+    path, oil_cut = _handmade(tmp_path)
+    out = Observations(experiments=[str(path)], pv_step=0.1).run(StageContext("obs"))
+    grid = out["pv"].values
+    np.testing.assert_allclose(grid, np.arange(7) * 0.1, atol=1e-12)
+    h = out.sel(experiment="H1")
+    np.testing.assert_allclose(h["dp"].values, 1000 + 500 * grid, rtol=1e-12)  # point values
+    np.testing.assert_allclose(h["recovery"].values[1:], grid[1:] / 2, rtol=1e-12)  # cumulative at tube ends
+    assert np.isnan(h["recovery"].values[0])  # nothing collected before the first tube ends
+    pairs = 0.5 * (oil_cut[0::2] + oil_cut[1::2])  # two 0.05-PV tubes per 0.1-PV interval
+    np.testing.assert_allclose(h["oil_cut"].values[1:], pairs, rtol=1e-12)
+    assert np.isnan(h["oil_cut"].values[0])
+    assert out["oil_cut"].attrs["units"] == "1" and out["dp"].attrs["units"] == "Pa"
+    assert float(out["total_pv"].sel(experiment="H1")) == pytest.approx(0.6)
+
+
+def test_noise_free_twin_matches_the_simulation_it_was_made_from():
+    """The twin measures a 0.005-PV simulation; on the 0.1-PV grid, dp and recovery are that simulation's point
+    values and oil cut the mean of its twenty 0.005-PV interval averages."""
+    fine = simulate("BCF1", cells=40, pv_step=0.005)
+    data = make_coreflood("BCF1", noise=NoiseModel.exact(), seed=0, cells=40, pv_step=0.005)
+    grid = np.arange(43) * 0.1
+    got = on_simulator_grid(data, ["dp", "oil_cut", "recovery"], grid, 0.1)
+    at = np.searchsorted(fine["pv"].values, grid - 1e-9)
+    np.testing.assert_allclose(got["dp"][:-1], fine["dp"].values[at][:-1], rtol=1e-9)  # transducer ends at 4.22
+    np.testing.assert_allclose(got["recovery"][1:], fine["recovery"].values[at][1:], rtol=1e-9)
+    cut = fine["oil_cut"].values[1:841].reshape(-1, 20).mean(axis=1)
+    np.testing.assert_allclose(got["oil_cut"][1:], cut, atol=1e-12)
+    out = Observations(experiments=["BCF1"]).run(StageContext("obs"))  # the bundled file, loaded by name
+    assert list(out["experiment"].values) == ["BCF1"] and np.isfinite(out["dp"].values[0, :-1]).all()
+
+
+def test_bad_experiment_is_named_before_work(tmp_path):
+    with pytest.raises(ParameterError, match="nope.nc"):
+        Observations(experiments=[str(tmp_path / "nope.nc")]).run(StageContext("obs"))
