@@ -1,0 +1,1 @@
+"""Calibration stages (NSGA-II, MCMC) and the data they share: observations aligned with surrogate outputs."""
