@@ -44,9 +44,10 @@ def common_grid(totals, pv_step: float) -> tuple[np.ndarray, list[np.ndarray]]:
     """The union of several experiments' output grids and, per experiment, the positions of its own grid in it.
 
     Experiments of different length share the step points; each one's off-step end point (e.g. 4.23 PV) is a
-    point of the union that the others leave NaN.
+    point of the union that the others leave NaN. Points are matched rounded to 1e-9 PV, so ``41 * 0.1`` and an
+    end point of exactly 4.1 are one point; the union holds the rounded values.
     """
-    grids = [output_grid(float(t), pv_step) for t in totals]
+    grids = [np.round(output_grid(float(t), pv_step), 9) for t in totals]
     union = np.unique(np.concatenate(grids))
     return union, [np.searchsorted(union, g) for g in grids]
 
