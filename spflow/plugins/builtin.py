@@ -12,9 +12,13 @@ def spflow_register_stages(register):
     from spflow.plugins.design.parameter_space import ParameterSpace
     from spflow.plugins.forward.stage import Forward
     from spflow.plugins.observations import Observations
+    from spflow.plugins.screening.morris_screening import MorrisScreening
+    from spflow.plugins.screening.selected_space import SelectedSpace
+    from spflow.plugins.screening.sobol_screening import SobolScreening
     from spflow.plugins.statistics.quantiles import Quantiles
 
-    for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles):
+    for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
+                  SobolScreening, MorrisScreening, SelectedSpace):
         register(stage)
 
 

@@ -1,0 +1,49 @@
+"""Dataset contracts of screening results (dims ``qoi``, ``param``).
+
+Every screening result carries the space it screened (``lower``, ``upper``, ``default``, ``unit`` over ``param``,
+i.e. it is also a valid SPACE), each parameter's ``group`` (sub-model), selection ``score`` and ``selected`` flag,
+the QoI labels (``qoi_variable``, ``qoi_experiment``, ``qoi_pv``, ``qoi_units``) and the ``variance`` of each QoI
+over the design its parameter was screened in. The ``selected_space`` stage turns it into the reduced SPACE.
+"""
+
+from spflow.core.schema import DatasetSchema, Variable
+
+__all__ = ["SCREENING", "SOBOL_SCREENING", "MORRIS_SCREENING"]
+
+_QP = ("qoi", "param")
+
+_COMMON = {
+    "lower": Variable(("param",), units=None),
+    "upper": Variable(("param",), units=None),
+    "default": Variable(("param",), units=None),
+    "unit": Variable(("param",), kind="U"),
+    "group": Variable(("param",), kind="U", doc="sub-model the parameter was screened with"),
+    "score": Variable(("param",), units="1", doc="selection score"),
+    "selected": Variable(("param",), kind="b", doc="kept by the selection rule"),
+    "variance": Variable(_QP, units="", doc="QoI variance over the parameter's screening design"),
+    "qoi_variable": Variable(("qoi",), kind="U"),
+    "qoi_experiment": Variable(("qoi",), kind="U"),
+    "qoi_pv": Variable(("qoi",), units="PV", allow_nan=True),
+    "qoi_units": Variable(("qoi",), kind="U"),
+}
+
+#: Any screening result (what ``selected_space`` and the figure need).
+SCREENING = DatasetSchema(dims=_QP, variables=_COMMON, attrs=("method",), doc="screening result")
+
+#: Sobol' screening: first-order and total indices with bootstrap half-widths (S2 only with calc_second_order).
+SOBOL_SCREENING = DatasetSchema(
+    dims=_QP,
+    variables=_COMMON
+    | {k: Variable(_QP, units="1") for k in ("S1", "S1_conf", "ST", "ST_conf")}
+    | {k: Variable(("qoi", "param", "param_j"), units="1", required=False, allow_nan=True) for k in ("S2", "S2_conf")},
+    attrs=("method",),
+    doc="Sobol' indices per QoI and parameter, selection and screened space",
+)
+
+#: Morris screening: elementary-effect statistics in QoI units.
+MORRIS_SCREENING = DatasetSchema(
+    dims=_QP,
+    variables=_COMMON | {k: Variable(_QP, units="") for k in ("mu", "mu_star", "mu_star_conf", "sigma")},
+    attrs=("method",),
+    doc="Morris mu, mu*, sigma per QoI and parameter, selection and screened space",
+)
