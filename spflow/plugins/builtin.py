@@ -16,9 +16,12 @@ def spflow_register_stages(register):
     from spflow.plugins.screening.selected_space import SelectedSpace
     from spflow.plugins.screening.sobol_screening import SobolScreening
     from spflow.plugins.statistics.quantiles import Quantiles
+    from spflow.plugins.surrogates.adaptive_design import AdaptivePCE
+    from spflow.plugins.surrogates.pce_stage import PCEStage
+    from spflow.plugins.surrogates.validation import SurrogateValidation
 
     for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
-                  SobolScreening, MorrisScreening, SelectedSpace):
+                  SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation):
         register(stage)
 
 

@@ -129,5 +129,7 @@ def load_surrogate(ds: xr.Dataset) -> Surrogate:
     SURROGATE.validate(ds, stage="load_surrogate", port="surrogate")
     kind = ds.attrs["surrogate"]
     if kind not in _KINDS:
+        from spflow.plugins.surrogates import kinds  # noqa: F401  (registers the built-in kinds)
+    if kind not in _KINDS:
         raise SchemaError(f"unknown surrogate kind {kind!r}; registered kinds: {surrogate_kinds()}")
     return _KINDS[kind].from_dataset(ds)

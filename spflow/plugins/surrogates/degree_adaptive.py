@@ -1,0 +1,150 @@
+"""Degree- and q-norm-adaptive PCE fit (UQLab's regression loop; thesis Algorithm 2 lines 6-8).
+
+For p = 1..p_max and each q of the list, the q-norm basis A(p, q) (:mod:`.basis`) is fitted by OLS (:mod:`.regression`)
+or hybrid LARS (:mod:`.lars`) and scored by its modified LOO error. Vector outputs (the 0.1 PV time series of a QoI)
+share one basis: the score of a basis is ε^mean, the mean over outputs of the modified LOO (Eq. 3.9 applied to the
+modified LOO), and the basis with the smallest ε^mean wins. With OLS every output then has coefficients on the whole
+of A(p, q); with LARS each output keeps its own sparse support inside it (zeros elsewhere), as UQLab fits one sparse
+PCE per output component.
+
+Stopping rules (UQLab defaults):
+
+* q loop (inner): a q giving the same number of terms as the previous q is skipped; the loop ends when the last two
+  q values did not improve on the best q of this degree;
+* degree loop (outer, ``early_stop``): ends when the last two degrees both scored worse than the best so far;
+* target accuracy: ends as soon as the best ε^mean <= ``target_loo``.
+
+OLS needs more points than terms (otherwise T(P, N) = ∞, :func:`.regression.loo_correction`), so such bases score ∞
+without being fitted. The fits run on one BLAS thread (:mod:`.blas`; the matrices are at most a few thousand rows).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from spflow.core.errors import ParameterError
+
+from .basis import design_matrix, multi_indices
+from .blas import single_threaded_blas
+from .lars import hybrid_lars_outputs
+from .regression import ols
+
+__all__ = ["PCEFit", "fit_pce", "SOLVERS"]
+
+SOLVERS = ("ols", "lars")
+
+
+@dataclass(frozen=True)
+class PCEFit:
+    """The selected expansion: ``indices`` (P, d), ``coefficients`` (m, P), per-output errors (m,) and the training
+    outputs' population variance (m,); ``history`` lists (degree, q, n_terms, ε^mean) of every scored basis."""
+
+    indices: np.ndarray
+    coefficients: np.ndarray
+    degree: int
+    q: float
+    solver: str
+    loo: np.ndarray
+    modified_loo: np.ndarray
+    empirical: np.ndarray
+    output_variance: np.ndarray
+    history: list[tuple[int, float, int, float]] = field(default_factory=list)
+
+    @property
+    def loo_mean(self) -> float:
+        """ε_LOO^mean (Eq. 3.9)."""
+        return float(np.mean(self.loo))
+
+    @property
+    def modified_loo_mean(self) -> float:
+        """The selection score: mean modified LOO over outputs."""
+        return float(np.mean(self.modified_loo))
+
+    @property
+    def empirical_mean(self) -> float:
+        """ε_emp^mean (Eq. 3.10)."""
+        return float(np.mean(self.empirical))
+
+
+def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, parallel) -> tuple[np.ndarray, ...]:
+    """(coefficients (m, P), loo, modified_loo, empirical) of one basis."""
+    if solver == "ols":
+        if psi.shape[0] <= psi.shape[1]:
+            inf = np.full(y.shape[1], np.inf)
+            return np.zeros((y.shape[1], psi.shape[1])), inf, inf, inf
+        fit = ols(psi, y)
+        return fit.coefficients.T, fit.loo, fit.modified_loo, fit.empirical
+    if parallel is None or y.shape[1] == 1:
+        results = hybrid_lars_outputs(psi, y)
+    else:
+        from joblib import delayed
+
+        chunks = np.array_split(np.arange(y.shape[1]), min(y.shape[1], max(1, parallel.n_jobs)))
+        parts = parallel(delayed(hybrid_lars_outputs)(psi, y[:, c]) for c in chunks)
+        results = [r for part in parts for r in part]
+    return (np.array([r.coefficients for r in results]), np.array([r.loo for r in results]),
+            np.array([r.modified_loo for r in results]), np.array([r.empirical for r in results]))
+
+
+def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], solver: str, target_loo):
+    if z.ndim != 2 or y.ndim != 2 or z.shape[0] != y.shape[0]:
+        raise ParameterError(f"fit_pce: need z (N, d) and y (N,) or (N, m) with the same N; got z {z.shape}, "
+                             f"y {y.shape}")
+    if z.shape[0] < 3:
+        raise ParameterError(f"fit_pce: need at least 3 training points, got {z.shape[0]}")
+    if not (np.isfinite(z).all() and np.isfinite(y).all()):
+        raise ParameterError("fit_pce: z and y must be finite")
+    if np.abs(z).max(initial=0.0) > 1.0 + 1e-9:
+        raise ParameterError("fit_pce: z must lie in the unit box [-1, 1]^d (map physical points with to_unit)")
+    if isinstance(degree_max, bool) or not isinstance(degree_max, (int, np.integer)) or not 1 <= degree_max <= 20:
+        raise ParameterError(f"fit_pce: degree_max must be an integer in [1, 20], got {degree_max!r}")
+    if not q or any(not 0.0 < float(v) <= 1.0 for v in q):
+        raise ParameterError(f"fit_pce: every q-norm must be in (0, 1], got {list(q)}")
+    if solver not in SOLVERS:
+        raise ParameterError(f"fit_pce: solver must be one of {SOLVERS}, got {solver!r}")
+    if target_loo is not None and not target_loo >= 0.0:
+        raise ParameterError(f"fit_pce: target_loo must be >= 0 or None, got {target_loo!r}")
+
+
+def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = 5, q: float | Sequence[float] = 0.9,
+            solver: str = "ols", target_loo: float | None = None, early_stop: bool = True,
+            parallel=None) -> PCEFit:
+    """Fit a PCE of ``y`` (N,) or (N, m) at points ``z`` (N, d) of [-1, 1]^d, choosing degree and q as above.
+
+    ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers.
+    """
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    y = np.asarray(y, dtype=float)
+    y = y[:, None] if y.ndim == 1 else y
+    qs = [float(v) for v in (q if isinstance(q, Sequence) else [q])]
+    _check(z, y, degree_max, qs, solver, target_loo)
+    history: list[tuple[int, float, int, float]] = []
+    best, best_score, degree_scores = None, np.inf, []
+    for degree in range(1, degree_max + 1):
+        degree_best, q_scores, last_size = np.inf, [], -1
+        for qv in qs:
+            indices = multi_indices(z.shape[1], degree, qv)
+            if indices.shape[0] == last_size:
+                continue
+            last_size = indices.shape[0]
+            with single_threaded_blas():
+                coef, loo, modified, emp = _fit_basis(design_matrix(z, indices), y, solver, parallel)
+            score = float(np.mean(modified))
+            history.append((degree, qv, indices.shape[0], score))
+            q_scores.append(score)
+            degree_best = min(degree_best, score)
+            if score < best_score or best is None:
+                best_score = score
+                best = (indices, coef, degree, qv, loo, modified, emp)
+            if len(q_scores) > 2 and min(q_scores[-2:]) >= min(q_scores[:-2]):
+                break
+        degree_scores.append(degree_best)
+        if target_loo is not None and best_score <= target_loo:
+            break
+        if early_stop and len(degree_scores) > 2 and min(degree_scores[-2:]) > min(degree_scores[:-2]):
+            break
+    indices, coef, degree, qv, loo, modified, emp = best
+    return PCEFit(indices, coef, degree, qv, solver, loo, modified, emp, y.var(axis=0), history)

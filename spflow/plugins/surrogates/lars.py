@@ -1,0 +1,152 @@
+"""Hybrid least-angle regression (Blatman & Sudret 2011), UQLab's best sparse PCE solver, absent from chaospy.
+
+The LAR path comes from :func:`sklearn.linear_model.lars_path_gram` on the centred, unit-variance non-constant
+regressors (the constant regressor is handled separately and always kept). "Hybrid" means that every active set
+along the path — the constant plus the first k regressors in LARS order, k = 0, 1, ... — is refitted by OLS
+(Eq. 3.6) and scored by its modified LOO error (:mod:`.regression`); the active set with the smallest modified LOO
+is selected and its OLS coefficients returned.
+
+All refits come from one QR factorisation of the regressors in LARS order: with Ψ_k = Q_k R_k, the hat diagonal is
+h_k = Σ_{j<=k} Q_j², the fitted values are Σ_{j<=k} Q_j (Q_jᵀ y) and tr((Ψ_kᵀΨ_k)⁻¹) = ||R_k⁻¹||²_F, all cumulative
+sums over the columns, so the whole path is scored in O(N K²).
+
+UQLab's early-stop rule is applied to the scored path: with mm = min(K, max(100, round(0.1 K))) (K = number of LAR
+steps), the search ends at the first step k > mm whose best modified LOO so far was reached at step <= k − mm (no
+improvement for mm steps); the selection is the best step before that point. At most min(N − 2, P − 1) regressors
+enter, so the OLS refits always have more points than terms.
+
+The factorisations are small (N x K) and run one after another, so BLAS is held to one thread inside the fits
+(:mod:`.blas`); parallelism belongs one level up (over outputs).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import solve_triangular
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.linear_model import lars_path_gram
+
+from spflow.core.errors import ParameterError
+
+from .blas import single_threaded_blas
+from .regression import is_constant, loo_correction, relative_errors
+
+__all__ = ["LarsResult", "hybrid_lars", "hybrid_lars_outputs"]
+
+
+@dataclass(frozen=True)
+class LarsResult:
+    """The selected sparse model of one output.
+
+    ``active``: column indices of Ψ in LARS order, constant first; ``coefficients``: (P,), zero outside ``active``;
+    ``loo``/``modified_loo``/``empirical``: errors of the OLS refit on ``active``; ``path_modified_loo``: the modified
+    LOO of every scored step (index k = constant + k regressors), up to the early stop.
+    """
+
+    active: np.ndarray
+    coefficients: np.ndarray
+    loo: float
+    modified_loo: float
+    empirical: float
+    path_modified_loo: np.ndarray
+
+
+class _Regressors:
+    """Ψ's constant column and its centred, unit-variance other columns with their Gram matrix (shared by outputs)."""
+
+    def __init__(self, psi: np.ndarray):
+        psi = np.ascontiguousarray(psi, dtype=float)
+        if psi.ndim != 2 or psi.shape[0] < 3:
+            raise ParameterError(f"hybrid_lars: psi must be (N, P) with N >= 3, got shape {psi.shape}")
+        if not np.isfinite(psi).all():
+            raise ParameterError("hybrid_lars: psi must be finite")
+        constant = np.flatnonzero(np.ptp(psi, axis=0) == 0.0)
+        constant = constant[psi[0, constant] != 0.0]
+        if constant.size == 0:
+            raise ParameterError("hybrid_lars: psi needs a non-zero constant column (the PCE's Ψ_0 = 1)")
+        self.psi = psi
+        self.constant = int(constant[0])
+        centred = psi - psi.mean(axis=0)
+        scale = np.sqrt(np.sum(centred**2, axis=0) / (psi.shape[0] - 1))
+        # candidates: non-constant columns (constant ones centre to zero and can never enter)
+        self.candidates = np.flatnonzero(scale > 0.0)
+        x = centred[:, self.candidates] / scale[self.candidates]
+        self.x = x
+        self.gram = x.T @ x
+        self.max_steps = int(min(psi.shape[0] - 2, self.candidates.size))
+
+    def path(self, y: np.ndarray) -> np.ndarray:
+        """Columns of Ψ in the order LAR activates them (at most ``max_steps``)."""
+        yc = y - y.mean()
+        if self.max_steps == 0 or is_constant(y[:, None])[0]:
+            return np.zeros(0, dtype=np.int64)
+        with warnings.catch_warnings():
+            # LAR stops by itself once the residual is numerically zero (exact fit); that is not an error here
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            _, active, _ = lars_path_gram(self.x.T @ yc, self.gram, n_samples=self.x.shape[0],
+                                          max_iter=self.max_steps, method="lar")
+        return self.candidates[np.asarray(active, dtype=np.int64)]
+
+    def fit(self, y: np.ndarray) -> LarsResult:
+        order = np.concatenate([[self.constant], self.path(y)]).astype(np.int64)
+        q, r = np.linalg.qr(self.psi[:, order])
+        diag = np.abs(np.diag(r))
+        # a regressor numerically dependent on the earlier ones ends the usable path
+        dependent = np.flatnonzero(diag < 1e-10 * diag.max())
+        usable = int(dependent[0]) if dependent.size else order.size
+        q, r, order = q[:, :usable], r[:usable, :usable], order[:usable]
+        qy = q.T @ y
+        fitted = np.cumsum(q * qy, axis=1)
+        leverage = np.cumsum(q**2, axis=1)
+        emp, loo = relative_errors(y[:, None], y[:, None] - fitted, leverage)
+        r_inv = solve_triangular(r, np.eye(usable))
+        trace = np.cumsum(np.sum(r_inv**2, axis=0))
+        # at most N - 1 terms, so every correction T(k + 1, N) is finite
+        t = np.array([loo_correction(y.size, k + 1, trace[k]) for k in range(usable)])
+        modified = (t * loo)[: _early_stop(t * loo)]
+        best = int(np.argmin(modified))
+        coef = np.zeros(self.psi.shape[1])
+        coef[order[: best + 1]] = solve_triangular(r[: best + 1, : best + 1], qy[: best + 1])
+        return LarsResult(order[: best + 1], coef, float(loo[best]), float(modified[best]), float(emp[best]),
+                          modified)
+
+
+def _early_stop(scores: np.ndarray) -> int:
+    """Number of leading path steps kept by UQLab's rule (no improvement over the last mm LAR steps)."""
+    steps = scores.size - 1  # step 0 is the constant-only model
+    mm = min(steps, max(100, round(0.1 * steps)))
+    step = np.arange(scores.size)
+    new_best = np.concatenate([[True], scores[1:] < np.minimum.accumulate(scores)[:-1]])
+    best_at = np.maximum.accumulate(np.where(new_best, step, 0))
+    stop = np.flatnonzero((step > mm) & (best_at <= step - mm))
+    return int(stop[0]) + 1 if stop.size else scores.size
+
+
+def _check_y(y: np.ndarray, n: int, ndim: int) -> np.ndarray:
+    y = np.asarray(y, dtype=float)
+    if y.ndim != ndim or y.shape[0] != n:
+        shape = "(N,)" if ndim == 1 else "(N, m)"
+        raise ParameterError(f"hybrid_lars: y must have shape {shape} with N = {n} rows, got {y.shape}")
+    if not np.isfinite(y).all():
+        raise ParameterError("hybrid_lars: y must be finite")
+    return y
+
+
+def hybrid_lars(psi: np.ndarray, y: np.ndarray) -> LarsResult:
+    """Hybrid LARS of one output ``y`` (N,) on the regressors ``psi`` (N, P) (one column must be constant)."""
+    regressors = _Regressors(psi)
+    y = _check_y(y, regressors.psi.shape[0], 1)
+    with single_threaded_blas():
+        return regressors.fit(y)
+
+
+def hybrid_lars_outputs(psi: np.ndarray, y: np.ndarray) -> list[LarsResult]:
+    """One independent hybrid LARS per column of ``y`` (N, m) (UQLab's treatment of vector outputs); the centred
+    regressors and their Gram matrix are computed once."""
+    regressors = _Regressors(psi)
+    y = _check_y(y, regressors.psi.shape[0], 2)
+    with single_threaded_blas():
+        return [regressors.fit(np.ascontiguousarray(y[:, j])) for j in range(y.shape[1])]

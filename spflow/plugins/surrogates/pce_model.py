@@ -1,0 +1,142 @@
+"""The ``pce`` surrogate kind: a polynomial chaos expansion on the orthonormal Legendre basis (thesis Eq. 3.4).
+
+Stored as arrays, no pickle: ``coefficients`` (output, term), ``multi_index`` (term, param), the per-output errors
+(``loo``, ``modified_loo``, ``empirical``; Eqs. 3.7-3.8) and the training outputs' population variance.
+
+Prediction: the mean is Σ_α y_α Ψ_α(z) at z = :meth:`to_unit` (x). The variance returned by :meth:`predict` is the
+LOO estimate of the proxy's squared error, ε_LOO · Var̂(y) = (1/N) Σ_i (e_i / (1 − h_i))², per output and constant in
+x — a PCE has no pointwise error model, and this is the number calibration adds to a likelihood's noise variance
+(``shared/notes/uq.md`` §4.3). Moments (Eqs. 3.11-3.12) and Sobol indices come from the coefficients
+(:mod:`.sobol_from_pce`), never from chaospy's symbolic ``Var``/``Sens_*``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from spflow.core.errors import ParameterError
+
+from . import sobol_from_pce as sobol
+from .basis import design_matrix
+from .blas import single_threaded_blas
+from .contract import Surrogate, register_surrogate_kind
+from .degree_adaptive import PCEFit, fit_pce
+from .outputs import OutputIndex
+
+__all__ = ["PCE"]
+
+#: Points per block in :meth:`PCE._predict` (keeps each block of Ψ in cache between its construction and its use;
+#: the blocks' products run on one BLAS thread, :mod:`.blas`).
+_BLOCK = 512
+
+
+@register_surrogate_kind
+class PCE(Surrogate):
+    """Polynomial chaos expansion; build with :meth:`fit` (or the ``pce`` / ``adaptive_pce`` stages)."""
+
+    kind = "pce"
+
+    def __init__(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
+                 indices: np.ndarray, coefficients: np.ndarray, loo: np.ndarray, modified_loo: np.ndarray,
+                 empirical: np.ndarray, output_variance: np.ndarray, info: dict):
+        super().__init__(names, lower, upper, outputs)
+        self.indices = np.ascontiguousarray(indices, dtype=np.int64)
+        self.coefficients = np.ascontiguousarray(coefficients, dtype=float)
+        self.loo, self.modified_loo = np.asarray(loo, dtype=float), np.asarray(modified_loo, dtype=float)
+        self.empirical, self.output_variance = np.asarray(empirical, dtype=float), np.asarray(output_variance, float)
+        self.info = dict(info)
+        d, m = len(self.names), len(outputs)
+        if self.indices.ndim != 2 or self.indices.shape[1] != d:
+            raise ParameterError(f"PCE: multi-indices must be (term, {d}) for parameters {self.names}, got "
+                                 f"{self.indices.shape}")
+        if self.coefficients.shape != (m, self.indices.shape[0]):
+            raise ParameterError(f"PCE: coefficients must be (output, term) = ({m}, {self.indices.shape[0]}), got "
+                                 f"{self.coefficients.shape}")
+        if any(a.shape != (m,) for a in (self.loo, self.modified_loo, self.empirical, self.output_variance)):
+            raise ParameterError(f"PCE: per-output errors must have length {m}")
+        if self.lower.shape != (d,) or self.upper.shape != (d,) or not np.all(self.lower < self.upper):
+            raise ParameterError(f"PCE: bounds must satisfy lower < upper for each of the {d} parameters")
+
+    @classmethod
+    def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
+            y: np.ndarray, **options) -> PCE:
+        """Fit on points ``x`` (N, d) in physical units inside the box and outputs ``y`` (N, m); ``options`` go to
+        :func:`.degree_adaptive.fit_pce` (``degree_max``, ``q``, ``solver``, ``target_loo``, ``parallel``...)."""
+        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        if x.shape[1] != len(names):
+            raise ParameterError(f"PCE.fit: x must have one column per parameter {list(names)}, got shape {x.shape}")
+        y = np.asarray(y, dtype=float).reshape(x.shape[0], -1)
+        if y.shape[1] != len(outputs):
+            raise ParameterError(f"PCE.fit: y has {y.shape[1]} columns for {len(outputs)} outputs")
+        result = fit_pce(2.0 * (x - lower) / (upper - lower) - 1.0, y, **options)
+        return cls.from_fit(names, lower, upper, outputs, result, n_train=x.shape[0])
+
+    @classmethod
+    def from_fit(cls, names, lower, upper, outputs, result: PCEFit, n_train: int) -> PCE:
+        info = {"degree": result.degree, "q": result.q, "solver": result.solver, "n_train": n_train}
+        return cls(names, lower, upper, outputs, result.indices, result.coefficients, result.loo,
+                   result.modified_loo, result.empirical, result.output_variance, info)
+
+    # -- prediction ---------------------------------------------------------------------------------------------
+    @property
+    def error_variance(self) -> np.ndarray:
+        """Per-output LOO estimate of the proxy's squared error, ε_LOO · Var̂(y)."""
+        return self.loo * self.output_variance
+
+    def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        z = self.to_unit(x)
+        mean = np.empty((z.shape[0], self.coefficients.shape[0]))
+        coef_t = self.coefficients.T
+        with single_threaded_blas():
+            for start in range(0, z.shape[0], _BLOCK):
+                stop = min(start + _BLOCK, z.shape[0])
+                np.matmul(design_matrix(z[start:stop], self.indices), coef_t, out=mean[start:stop])
+        return mean, np.broadcast_to(self.error_variance, mean.shape).copy()
+
+    # -- statistics from the coefficients -----------------------------------------------------------------------
+    def moments(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and variance of every output under the uniform input box (Eqs. 3.11-3.12)."""
+        return sobol.moments(self.indices, self.coefficients)
+
+    def sobol(self) -> xr.Dataset:
+        """First-order and total Sobol indices, dims (output, param)."""
+        first = sobol.first_order(self.indices, self.coefficients)
+        total = sobol.total_order(self.indices, self.coefficients)
+        ds = xr.Dataset({"S1": (("output", "param"), first, {"units": "1"}),
+                         "ST": (("output", "param"), total, {"units": "1"})},
+                        coords={"param": self.names, **self.outputs.coords()})
+        ds.attrs = self.outputs.unit_attrs()
+        return ds
+
+    def group_sobol(self, params: list[str], closed: bool = False) -> np.ndarray:
+        """Interaction (or closed) Sobol index of a group of parameters, per output."""
+        unknown = [p for p in params if p not in self.names]
+        if unknown:
+            raise ParameterError(f"PCE.group_sobol: unknown parameter {unknown[0]!r}; parameters: {self.names}")
+        return sobol.group_index(self.indices, self.coefficients, [self.names.index(p) for p in params], closed)
+
+    # -- storage ------------------------------------------------------------------------------------------------
+    def to_dataset(self) -> xr.Dataset:
+        errors = {name: ("output", getattr(self, name), {"units": "1"})
+                  for name in ("loo", "modified_loo", "empirical")}
+        ds = self._dataset(
+            {"coefficients": (("output", "term"), self.coefficients, {"units": "output units (units_<variable>)"}),
+             "multi_index": (("term", "param"), self.indices, {"units": "1"}),
+             "output_variance": ("output", self.output_variance,
+                                 {"units": "output units squared", "long_name": "population variance of training y"}),
+             **errors},
+            coords={"term": np.arange(self.indices.shape[0])},
+            attrs={**self.info, "loo_mean": float(np.mean(self.loo)),
+                   "modified_loo_mean": float(np.mean(self.modified_loo)),
+                   "empirical_mean": float(np.mean(self.empirical))},
+        )
+        return ds
+
+    @classmethod
+    def from_dataset(cls, ds: xr.Dataset) -> PCE:
+        info = {k: ds.attrs[k] for k in ("degree", "q", "solver", "n_train")}
+        return cls(**cls._common(ds), indices=ds["multi_index"].values, coefficients=ds["coefficients"].values,
+                   loo=ds["loo"].values, modified_loo=ds["modified_loo"].values, empirical=ds["empirical"].values,
+                   output_variance=ds["output_variance"].values, info=info)

@@ -1,0 +1,69 @@
+"""The ``pce`` stage: a degree-adaptive PCE proxy of simulator responses (thesis §3.5, Algorithm 2 lines 5-10).
+
+Inputs: the parameter ``space`` (uniform box), the training ``design`` on it and the forward stage's ``responses`` at
+the design points. Output: the fitted surrogate Dataset (:data:`~.contract.SURROGATE`, kind ``pce``) with per-output
+``loo``, ``modified_loo`` and ``empirical`` errors and their means over outputs (ε^mean, Eqs. 3.9-3.10) in attrs.
+"""
+
+from __future__ import annotations
+
+import xarray as xr
+
+from spflow.core.errors import ParameterError
+from spflow.core.params import Param
+from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.schemas import DESIGN, SPACE
+from spflow.plugins.forward.stage import RESPONSE_UNITS, RESPONSES
+
+from .contract import SURROGATE
+from .degree_adaptive import SOLVERS
+from .pce_model import PCE
+from .training_data import training_set
+
+__all__ = ["PCEStage", "PCE_PARAMS", "fit_options", "check_lists"]
+
+#: Parameters of the PCE fit, shared with ``adaptive_pce``.
+PCE_PARAMS = {
+    "variables": Param(list, ["dp", "recovery"], choices=sorted(RESPONSE_UNITS),
+                       doc="response variables to approximate (each a time series on the PV grid)"),
+    "experiments": Param(list, ["BCF1"], doc="experiments whose responses are approximated"),
+    "degree_max": Param(int, 5, bounds=(1, 20), doc="largest total degree p tried (thesis: 5)"),
+    "q": Param(float, 0.9, bounds=(0.05, 1.0), doc="q-norm of the hyperbolic truncation (thesis: 0.9)"),
+    "solver": Param(str, "ols", choices=list(SOLVERS), doc="OLS or hybrid LARS (sparse)"),
+    "target_loo": Param(float, 0.0, bounds=(0.0, 1.0),
+                        doc="stop raising the degree once the mean modified LOO error is <= this"),
+}
+
+
+def fit_options(params, ctx: StageContext) -> dict:
+    """Keyword arguments of :func:`.degree_adaptive.fit_pce` from a stage's parameters."""
+    return {"degree_max": params["degree_max"], "q": params["q"], "solver": params["solver"],
+            "target_loo": params["target_loo"], "parallel": ctx.parallel() if ctx.n_jobs > 1 else None}
+
+
+def check_lists(stage: str, params) -> None:
+    """``variables`` and ``experiments`` must be non-empty lists without repeats (checked before any work)."""
+    for name in ("variables", "experiments"):
+        values = params[name]
+        if not values or len(set(values)) != len(values):
+            raise ParameterError(f"stage {stage!r} parameter {name!r} must be a non-empty list without repeats, "
+                                 f"got {values!r}")
+
+
+class PCEStage(Stage):
+    name = "pce"
+    version = "1"
+    description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
+    inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
+    output = SURROGATE
+    params = PCE_PARAMS
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        check_lists(self.name, self.params)
+
+    def run(self, ctx: StageContext, space: xr.Dataset, design: xr.Dataset, responses: xr.Dataset) -> xr.Dataset:
+        data = training_set(space, design, responses, list(self.params["variables"]), list(self.params["experiments"]))
+        model = PCE.fit(data.names, data.lower, data.upper, data.outputs, data.x, data.y,
+                        **fit_options(self.params, ctx))
+        return model.to_dataset()

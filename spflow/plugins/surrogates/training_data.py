@@ -1,0 +1,62 @@
+"""Training (or validation) data of a surrogate from the pipeline's Datasets: a parameter space, a design on it and
+the simulator's responses at the design points.
+
+Every surrogate stage (``pce``, ``adaptive_pce``, the Kriging ones, ``surrogate_validation``) reads its inputs through
+these checks, so a design whose parameters differ from the space's, a responses Dataset of another length or a point
+outside the box fails with one clear message before any fitting.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from spflow.core.errors import ParameterError
+
+from .outputs import OutputIndex, stack_outputs
+
+__all__ = ["TrainingSet", "design_points", "training_set"]
+
+
+@dataclass(frozen=True)
+class TrainingSet:
+    """Points ``x`` (N, d) in physical units in the box ``lower``..``upper`` and outputs ``y`` (N, m)."""
+
+    names: list[str]
+    lower: np.ndarray
+    upper: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    outputs: OutputIndex
+
+
+def design_points(design: xr.Dataset, names: list[str], lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The design's points (N, d) with columns in the order of ``names``; all inside [lower, upper]."""
+    have = [str(p) for p in design["param"].values]
+    missing = [n for n in names if n not in have]
+    if missing or len(have) != len(names):
+        raise ParameterError(f"surrogate data: the design's parameters {have} must be exactly {names} "
+                             f"(missing {missing})")
+    x = design["values"].transpose("sample", "param").sel(param=names).values.astype(float)
+    slack = 1e-9 * (upper - lower)
+    outside = np.flatnonzero(((x < lower - slack) | (x > upper + slack)).any(axis=1))
+    if outside.size:
+        i = int(outside[0])
+        raise ParameterError(f"surrogate data: design point {i} = {dict(zip(names, x[i]))} lies outside the box "
+                             f"lower={dict(zip(names, lower))}, upper={dict(zip(names, upper))}")
+    return np.clip(x, lower, upper)
+
+
+def training_set(space: xr.Dataset, design: xr.Dataset, responses: xr.Dataset, variables: list[str],
+                 experiments: list[str] | None) -> TrainingSet:
+    """Points of ``design`` on ``space`` and the ``variables`` of ``responses`` (one row per design sample)."""
+    names = [str(p) for p in space["param"].values]
+    lower, upper = space["lower"].values.astype(float), space["upper"].values.astype(float)
+    x = design_points(design, names, lower, upper)
+    if responses.sizes.get("sample") != x.shape[0]:
+        raise ParameterError(f"surrogate data: the responses have {responses.sizes.get('sample')} samples, the "
+                             f"design {x.shape[0]} points")
+    y, outputs = stack_outputs(responses, variables, experiments)
+    return TrainingSet(names, lower, upper, x, y, outputs)
