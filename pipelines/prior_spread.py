@@ -14,20 +14,7 @@ from pathlib import Path
 
 import spflow
 from spflow import datasets
-
-#: Table 3.2 ranges in UTCHEM names (alpha_V2, C33max0, C33max1, ad31, gamma_1/2, c_rk, n_high, n_low, alpha_L1).
-TABLE_3_2 = {
-    "ALPHAV2": [0.0, 3.0],
-    "HBNC70": [0.02, 0.05],
-    "HBNC71": [0.01, 0.02],
-    "AD31": [0.0, 2.0],
-    "GAMHF": [55.0, 100.0],
-    "CRK": [0.05, 0.1],
-    "E2C": [1.5, 3.0],
-    "E2WC": [1.5, 3.0],
-    "ALPHAL1": [0.008, 0.012],
-}
-
+from spflow.plugins.design.thesis_tables import TABLE_3_2
 
 def pipeline(samples: int = 32) -> spflow.Pipeline:
     p = spflow.Pipeline("prior_spread")

@@ -12,7 +12,6 @@ Run: ``.venv/bin/python benchmarks/figures/fig_3_2_sobol_screening.py [--samples
 """
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
@@ -23,9 +22,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
 
-from pipelines.prior_spread import TABLE_3_2  # noqa: E402
+from spflow.plugins.design.thesis_tables import TABLE_3_2  # noqa: E402
 from spflow.core.stage import StageContext  # noqa: E402
 from spflow.plugins.design.parameter_space import ParameterSpace  # noqa: E402
 from spflow.plugins.screening.figure import plot_total_indices  # noqa: E402

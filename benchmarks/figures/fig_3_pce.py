@@ -17,7 +17,6 @@ and prints the numbers. Run: ``.venv/bin/python benchmarks/figures/fig_3_pce.py 
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import matplotlib
@@ -28,10 +27,9 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "pipelines"))
 
 import spflow  # noqa: E402
-from prior_spread import TABLE_3_2  # noqa: E402
+from spflow.plugins.design.thesis_tables import TABLE_3_2  # noqa: E402
 from spflow.core.stage import StageContext  # noqa: E402
 from spflow.plugins.surrogates.contract import load_surrogate  # noqa: E402
 from spflow.plugins.surrogates.pce_stage import PCEStage  # noqa: E402

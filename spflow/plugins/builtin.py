@@ -7,6 +7,8 @@ from spflow.core.hookspecs import hookimpl
 
 @hookimpl
 def spflow_register_stages(register):
+    from spflow.plugins.calibration.nsga2_pareto_design import ParetoDesign
+    from spflow.plugins.calibration.nsga2_stage import NSGA2Calibration
     from spflow.plugins.data import LoadNetCDF
     from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
     from spflow.plugins.design.parameter_space import ParameterSpace
@@ -21,7 +23,8 @@ def spflow_register_stages(register):
     from spflow.plugins.surrogates.validation import SurrogateValidation
 
     for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
-                  SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation):
+                  SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation,
+                  NSGA2Calibration, ParetoDesign):
         register(stage)
 
 

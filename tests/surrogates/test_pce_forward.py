@@ -4,8 +4,6 @@ the design grows (Algorithm 2), and the proxy predicts final recovery and max Δ
 A small, coarse-grid version of the thesis's study (which reports R² ≈ 0.99 at N_s = 200): 30 → 90 training runs on
 30 cells, 40 validation runs. ``benchmarks/figures/fig_3_pce.py`` runs the N_s = 50..500 study at 100 cells."""
 
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,15 +11,11 @@ import pytest
 from spflow.core.stage import StageContext
 from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
 from spflow.plugins.design.parameter_space import ParameterSpace
+from spflow.plugins.design.thesis_tables import TABLE_3_2
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.surrogates.adaptive_design import AdaptivePCE
 from spflow.plugins.surrogates.validation import SurrogateValidation
 
-_SPEC = importlib.util.spec_from_file_location(
-    "prior_spread", Path(__file__).resolve().parents[2] / "pipelines" / "prior_spread.py")
-_PRIOR_SPREAD = importlib.util.module_from_spec(_SPEC)
-_SPEC.loader.exec_module(_PRIOR_SPREAD)
-TABLE_3_2 = _PRIOR_SPREAD.TABLE_3_2  # thesis Table 3.2 in UTCHEM names
 CELLS = 30
 
 

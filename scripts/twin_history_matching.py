@@ -1,0 +1,136 @@
+"""Clean synthetic-twin acceptance of the chapter-3 history match (issue 6).
+
+A "clean twin" has its truth inside the Table 3.2 ranges, no withheld mechanism (the model's own default effects) and
+measurement noise only (``NoiseModel`` with random transducer, oil-reading and assay errors but zero offset, drift
+and dead volume). The script writes BCF1-3 twins to netCDF files, runs ``pipelines/history_matching.py`` on them
+(PCE on BCF1, NSGA-II, simulator checks on BCF2/BCF3), and prints
+
+* the relative L2 misfits on the held-out BCF2/BCF3 of the simulator at the final Pareto set and at the truth itself
+  (the truth's misfit is the noise floor), and their ratio (acceptance: <= 1.5);
+* whether the truth lies inside the calibrated range (min/max over the Pareto set) of every parameter.
+
+    .venv/bin/python scripts/twin_history_matching.py [--samples 200 --generations 100 ...] [--out DIR]
+
+Exit status 0 when both acceptance criteria hold, 1 otherwise. :func:`twin_check` is what the reduced-cost test
+calls.
+"""
+
+from __future__ import annotations
+
+import argparse
+import runpy
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import spflow
+from spflow.core.stage import StageContext
+from spflow.plugins.calibration.nsga2_heldout import HeldOutCheck
+from spflow.plugins.forward.stage import Forward
+from spflow.synthetic import NoiseModel, make_coreflood
+
+PIPELINES = Path(__file__).resolve().parent.parent / "pipelines"
+
+#: The twin's truth: inside Table 3.2, away from the bounds and from the model defaults.
+TRUTH = {"ALPHAV2": 1.2, "HBNC70": 0.036, "HBNC71": 0.0135, "AD31": 0.8, "GAMHF": 72.0, "CRK": 0.066,
+         "E2C": 2.1, "E2WC": 2.5, "ALPHAL1": 0.0094}
+
+#: Measurement noise only: random errors as in the default lab model, no systematic offset, drift or dead volume.
+CLEAN_NOISE = NoiseModel(pressure_offset_pa=0.0, pressure_drift_pa_per_pv=0.0, dead_volume_ml=0.0)
+
+
+def write_twins(directory: Path, cells: int, seed: int = 11) -> list[str]:
+    """BCF1-3 clean twins of :data:`TRUTH` as netCDF files in ``directory``; returns their paths."""
+    paths = []
+    for k, experiment in enumerate(("BCF1", "BCF2", "BCF3")):
+        ds = make_coreflood(experiment, TRUTH, noise=CLEAN_NOISE, seed=seed + k, cells=cells)
+        path = directory / f"twin_{experiment}.nc"
+        ds.to_netcdf(path)
+        paths.append(str(path))
+    return paths
+
+
+def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 1, noise_seed: int = 11, **settings) -> dict:
+    """Run the history-matching pipeline on clean twins (measurement noise seeded by ``noise_seed``) and return the
+    acceptance numbers (see module doc)."""
+    hm = runpy.run_path(str(PIPELINES / "history_matching.py"))
+    cells = settings.get("cells", 100)
+    data_dir = Path(cache) / f"twin_data_{noise_seed}"
+    data_dir.mkdir(parents=True, exist_ok=True)
+    paths = write_twins(data_dir, cells, noise_seed)
+    p = hm["pipeline"](observed=paths, **settings)
+    t0 = time.perf_counter()
+    result = spflow.run(p, cache=cache, jobs=jobs)
+    seconds = time.perf_counter() - t0
+    cal = result["calibration"]
+    names = [str(n) for n in cal["param"].values]
+    forward = Forward(experiments=list(cal["experiment"].values), cells=cells)
+    check = HeldOutCheck(forward, result["observations"], list(cal["objective"].values), names)
+    truth_misfit = check.misfits(StageContext("twin", n_jobs=jobs, verbose=False),
+                                 np.array([[TRUTH[n] for n in names]]))[0]
+    pareto = cal["heldout_misfit"].values  # (pareto, experiment, objective)
+    inside = {n: bool(cal["calibrated_lower"].sel(param=n) <= TRUTH[n] <= cal["calibrated_upper"].sel(param=n))
+              for n in names}
+    if outdir is not None:
+        outdir.mkdir(parents=True, exist_ok=True)
+        hm["report"](result, outdir, truth=TRUTH)
+    return {
+        "seconds": seconds, "executed": list(result.executed), "calibration": cal,
+        "observations": result["observations"],
+        "experiments": [str(e) for e in cal["experiment"].values],
+        "variables": [str(v) for v in cal["objective"].values],
+        "pareto_misfit_mean": pareto.mean(axis=0), "pareto_misfit_max": pareto.max(axis=0),
+        "truth_misfit": truth_misfit,
+        "ratio": float(pareto.mean() / truth_misfit.mean()),
+        "ratio_worst_point": float(pareto.mean(axis=(1, 2)).max() / truth_misfit.mean()),
+        "truth_inside": inside,
+    }
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--samples", type=int, default=200, help="N_s, LHS training runs of the PCE")
+    ap.add_argument("--degree-max", type=int, default=5)
+    ap.add_argument("--solver", default="lars", choices=["ols", "lars"])
+    ap.add_argument("--cells", type=int, default=100)
+    ap.add_argument("--population", type=int, default=120)
+    ap.add_argument("--generations", type=int, default=100)
+    ap.add_argument("--seed", type=int, default=2024)
+    ap.add_argument("--noise-seed", type=int, default=11, help="seed of the twins' measurement noise")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--cache", default=None, help="cache directory (default: a temporary one)")
+    ap.add_argument("--out", default=None, help="write the figures here")
+    args = ap.parse_args(argv)
+    settings = dict(samples=args.samples, degree_max=args.degree_max, solver=args.solver, cells=args.cells,
+                    population=args.population,
+                    generations=args.generations, seed=args.seed)
+    with tempfile.TemporaryDirectory() as tmp:
+        cache = Path(args.cache or tmp)
+        r = twin_check(cache, Path(args.out) if args.out else None, jobs=args.jobs, noise_seed=args.noise_seed,
+                       **settings)
+    print(f"settings: {settings}, noise seed {args.noise_seed}; pipeline wall time {r['seconds']:.1f} s "
+          f"({len(r['executed'])} nodes computed)")
+    cal = r["calibration"]
+    print(f"stopped after {cal.attrs['generations_run']} generations; Pareto set of {cal.sizes['pareto']} points")
+    print("held-out relative L2 misfit      Pareto mean   Pareto max    truth")
+    for i, e in enumerate(r["experiments"]):
+        for j, v in enumerate(r["variables"]):
+            print(f"  {e} {v:<9}                  {r['pareto_misfit_mean'][i, j]:.4f}       "
+                  f"{r['pareto_misfit_max'][i, j]:.4f}       {r['truth_misfit'][i, j]:.4f}")
+    print(f"sigma_loss(Pareto) / sigma_loss(truth) = {r['ratio']:.3f} (acceptance <= 1.5); worst single Pareto "
+          f"point: {r['ratio_worst_point']:.3f}")
+    print("truth inside the calibrated ranges:")
+    for n, ok in r["truth_inside"].items():
+        c = cal.sel(param=n)
+        print(f"  {n:<8} truth {TRUTH[n]:<8.4g} calibrated [{float(c.calibrated_lower):.4g}, "
+              f"{float(c.calibrated_upper):.4g}]  {'yes' if ok else 'NO'}")
+    ok = r["ratio"] <= 1.5 and all(r["truth_inside"].values())
+    print("acceptance:", "PASS" if ok else "FAIL")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,217 @@
+"""The ``nsga2_calibration`` stage: multi-objective history matching on a surrogate, cross-validated with the simulator
+on held-out corefloods (thesis §3.6-3.7, Algorithm 3).
+
+* Objectives (Eqs. 3.16-3.17): ½‖P(ξ) − y‖² of each ``variables`` entry (thesis: cumulative recovery, pressure
+  drop) of the ``training`` coreflood (BCF1), P = the surrogate's mean, evaluated for a whole generation at once
+  (:class:`~spflow.plugins.calibration.nsga2_problem.SurrogateMisfitProblem`).
+* Search space: the ``space`` box (Table 3.2 ranges), which must lie inside the surrogate's training box.
+* Optimiser: pymoo NSGA-II with the thesis's settings (population 120, tournament of 4, crossover probability 0.8,
+  mutation probability 0.01; mapping in :mod:`~spflow.plugins.calibration.nsga2_algorithm`), seeded.
+* Algorithm 3: every ``n_cross`` generations and at the last one the current Pareto set is simulated on the
+  ``held_out`` corefloods (BCF2, BCF3) with the forward model (``fixed``, ``effects``, ``cells``, ``pv_step`` as the
+  surrogate's training runs); σ_loss = mean relative L2 misfit; stop at ``generations`` or when σ_loss <
+  ``sigma_tol`` (0 disables the early stop).
+
+Output (dims ``pareto``, ``param``, ``objective``, ``generation``, ``snapshot``, ``member``, ``checkpoint``,
+``experiment``): the final Pareto set's ``designs`` and ``objectives``, its held-out misfits, the per-generation
+history (front size, normalised hypervolume, best objectives), the fronts at the ``snapshots`` generations and the
+last one (Fig. 3.10; NaN-padded to the largest front), σ_loss and mean misfits per checkpoint, and the calibrated
+ranges (min/max of the Pareto designs) next to the prior bounds (Fig. 3.14). Units are in each variable's attrs;
+``param_unit`` and ``objective_unit`` coordinates give the per-parameter and per-objective units.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from pymoo.optimize import minimize
+
+from spflow.core.errors import ParameterError
+from spflow.core.params import Param
+from spflow.core.schema import DatasetSchema, Variable
+from spflow.core.stage import Stage, StageContext
+from spflow.plugins.calibration.nsga2_algorithm import THESIS_GA, thesis_nsga2
+from spflow.plugins.calibration.nsga2_heldout import HeldOutCheck
+from spflow.plugins.calibration.nsga2_history import HV_REFERENCE, CalibrationHistory
+from spflow.plugins.calibration.nsga2_problem import SurrogateMisfitProblem
+from spflow.plugins.design.schemas import SPACE
+from spflow.plugins.forward import effects as forward_effects
+from spflow.plugins.forward.numba_cache import source_digest
+from spflow.plugins.forward.parameters import resolve_params
+from spflow.plugins.forward.schedule import BCF_SCHEDULES
+from spflow.plugins.forward.stage import Forward
+from spflow.plugins.observations import OBSERVATIONS
+from spflow.plugins.surrogates.contract import SURROGATE, load_surrogate
+
+__all__ = ["NSGA2Calibration", "NSGA2_CALIBRATION"]
+
+_PER_PARAM = "per-parameter (see param_unit)"
+_PER_OBJECTIVE = "per-objective (see objective_unit)"
+
+#: Schema of the stage's output (what the Pareto-design stage and the figures read).
+NSGA2_CALIBRATION = DatasetSchema(
+    dims=("pareto", "param", "objective", "generation", "snapshot", "member", "checkpoint", "experiment"),
+    variables={
+        "designs": Variable(("pareto", "param"), units=_PER_PARAM),
+        "objectives": Variable(("pareto", "objective"), units=_PER_OBJECTIVE),
+        "heldout_misfit": Variable(("pareto", "experiment", "objective"), units="1"),
+        "n_front": Variable(("generation",), kind="i", units="1"),
+        "hypervolume": Variable(("generation",), units="1"),
+        "best_objectives": Variable(("generation", "objective"), units=_PER_OBJECTIVE),
+        "front_size": Variable(("snapshot",), kind="i", units="1"),
+        "front_designs": Variable(("snapshot", "member", "param"), units=_PER_PARAM, allow_nan=True),
+        "front_objectives": Variable(("snapshot", "member", "objective"), units=_PER_OBJECTIVE, allow_nan=True),
+        "sigma_loss": Variable(("checkpoint",), units="1"),
+        "checkpoint_misfit": Variable(("checkpoint", "experiment", "objective"), units="1"),
+        "prior_lower": Variable(("param",), units=_PER_PARAM),
+        "prior_upper": Variable(("param",), units=_PER_PARAM),
+        "calibrated_lower": Variable(("param",), units=_PER_PARAM),
+        "calibrated_upper": Variable(("param",), units=_PER_PARAM),
+    },
+    attrs=("training", "generations_run", "stop_reason"),
+    doc="NSGA-II history match: Pareto set, history, held-out misfits, calibrated ranges",
+)
+
+_OBJECTIVE_CHOICES = ["recovery", "dp", "oil_cut"]
+
+
+def _squared_unit(unit: str) -> str:
+    return "1" if unit in ("1", "") else f"{unit}^2"
+
+
+class NSGA2Calibration(Stage):
+    name = "nsga2_calibration"
+    version = "1"
+    description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
+    inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
+    output = NSGA2_CALIBRATION
+    params = {
+        "training": Param(str, "BCF1", doc="experiment whose observations define the objectives"),
+        "held_out": Param(list, ["BCF2", "BCF3"], choices=sorted(BCF_SCHEDULES),
+                          doc="corefloods simulated at the Pareto set for cross-validation"),
+        "variables": Param(list, ["recovery", "dp"], choices=_OBJECTIVE_CHOICES,
+                           doc="one objective ½‖P − y‖² per variable (thesis: recovery, dp)"),
+        "population": Param(int, THESIS_GA["pop_size"], bounds=(4, 100_000), doc="population size pop_size"),
+        "generations": Param(int, 100, bounds=(1, 100_000), doc="maximum generations N_gen^max"),
+        "n_cross": Param(int, 50, bounds=(1, 100_000), doc="generations between held-out checks"),
+        "sigma_tol": Param(float, 0.0, bounds=(0.0, None), doc="stop when σ_loss < sigma_tol (0: never)"),
+        "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="random seed of the GA"),
+        "tournament": Param(int, THESIS_GA["tournament"], bounds=(2, 64), doc="tournament size T_s"),
+        "crossover_prob": Param(float, THESIS_GA["crossover_prob"], bounds=(0.0, 1.0),
+                                doc="probability that a mating applies SBX crossover (P_c)"),
+        "mutation_prob": Param(float, THESIS_GA["mutation_prob"], bounds=(0.0, 1.0),
+                               doc="per-variable polynomial-mutation probability (P_m)"),
+        "crossover_eta": Param(float, 15.0, bounds=(0.0, 1000.0), doc="SBX distribution index"),
+        "mutation_eta": Param(float, 20.0, bounds=(0.0, 1000.0), doc="polynomial-mutation distribution index"),
+        "snapshots": Param(list, [1, 10, 50, 100], bounds=(1, None), doc="generations whose whole front is kept"),
+        "fixed": Param(dict, {}, doc="forward-model overrides of the held-out runs (as the surrogate's training)"),
+        "effects": Param(dict, {}, doc="forward-model effect strengths of the held-out runs"),
+        "cells": Param(int, 100, bounds=(4, 5000), doc="grid cells of the held-out runs"),
+        "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="output grid of the held-out runs"),
+    }
+
+    @classmethod
+    def code_fingerprint(cls) -> str:
+        """The stage's source plus the simulator's (the held-out checks run it), like the ``forward`` stage."""
+        return f"{super().code_fingerprint()}-{source_digest()[:16]}"
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        p = self.params
+        for name in ("variables", "held_out"):
+            if not p[name] or len(set(p[name])) != len(p[name]):
+                raise ParameterError(f"stage 'nsga2_calibration' parameter {name!r} must be a non-empty list without "
+                                     f"repeats, got {p[name]}")
+        if p["training"] in p["held_out"]:
+            raise ParameterError(f"stage 'nsga2_calibration': training experiment {p['training']!r} must not be one of "
+                                 f"the held-out experiments {p['held_out']}")
+        if any(not isinstance(g, int) for g in p["snapshots"]):
+            raise ParameterError(f"stage 'nsga2_calibration' parameter 'snapshots' must list generation numbers "
+                                 f">= 1, got {p['snapshots']}")
+        resolve_params(p["fixed"])
+        forward_effects.default_registry().resolve(p["effects"])
+        self.forward = Forward(experiments=p["held_out"], fixed=p["fixed"], effects=p["effects"], cells=p["cells"],
+                               pv_step=p["pv_step"])
+
+    def run(self, ctx: StageContext, surrogate: xr.Dataset, observations: xr.Dataset, space: xr.Dataset) -> xr.Dataset:
+        p = self.params
+        model = load_surrogate(surrogate)
+        names = [str(n) for n in space["param"].values]
+        lower, upper = space["lower"].values.astype(float), space["upper"].values.astype(float)
+        for bound in (lower, upper):  # the forward model accepts every point of the box (checked before any work)
+            resolve_params(dict(p["fixed"], **dict(zip(names, map(float, bound)))))
+        problem = SurrogateMisfitProblem(model, observations, names, lower, upper, p["variables"], p["training"])
+        heldout = HeldOutCheck(self.forward, observations, p["variables"], names)
+        history = CalibrationHistory(p["generations"], p["n_cross"], p["sigma_tol"], p["snapshots"],
+                                     lambda points: heldout.misfits(ctx, points))
+        algorithm = thesis_nsga2(pop_size=p["population"], tournament=p["tournament"],
+                                 crossover_prob=p["crossover_prob"], mutation_prob=p["mutation_prob"],
+                                 crossover_eta=p["crossover_eta"], mutation_eta=p["mutation_eta"])
+        minimize(problem, algorithm, ("n_gen", p["generations"]), seed=p["seed"], callback=history, verbose=False)
+        units = [_squared_unit(model.outputs.units.get(v, "1")) for v in p["variables"]]
+        return self._dataset(history, names, space, units)
+
+    def _dataset(self, history: CalibrationHistory, names: list[str], space: xr.Dataset,
+                 objective_units: list[str]) -> xr.Dataset:
+        p = self.params
+        last = history.last_generation
+        designs, objectives = history.fronts[last]
+        order = np.argsort(objectives[:, 0], kind="stable")
+        designs, objectives = designs[order], objectives[order]
+        snaps = sorted(history.fronts)
+        width = max(len(history.fronts[g][0]) for g in snaps)
+        front_x = np.full((len(snaps), width, len(names)), np.nan)
+        front_f = np.full((len(snaps), width, len(p["variables"])), np.nan)
+        for i, g in enumerate(snaps):
+            x, f = history.fronts[g]
+            front_x[i, : len(x)], front_f[i, : len(f)] = x, f
+        checks = sorted(history.checkpoints)
+        misfit_final = history.checkpoints[last][order]
+        per_param, per_obj, one = {"units": _PER_PARAM}, {"units": _PER_OBJECTIVE}, {"units": "1"}
+        ds = xr.Dataset(
+            {
+                "designs": (("pareto", "param"), designs, per_param),
+                "objectives": (("pareto", "objective"), objectives, per_obj),
+                "heldout_misfit": (("pareto", "experiment", "objective"), misfit_final, one),
+                "n_front": ("generation", np.array(history.n_front, dtype=np.int64), one),
+                "hypervolume": ("generation", np.array(history.hypervolume), one),
+                "best_objectives": (("generation", "objective"), np.array(history.best), per_obj),
+                "front_size": ("snapshot", np.array([len(history.fronts[g][0]) for g in snaps], dtype=np.int64), one),
+                "front_designs": (("snapshot", "member", "param"), front_x, per_param),
+                "front_objectives": (("snapshot", "member", "objective"), front_f, per_obj),
+                "sigma_loss": ("checkpoint", np.array([history.checkpoints[g].mean() for g in checks]), one),
+                "checkpoint_misfit": (("checkpoint", "experiment", "objective"),
+                                      np.array([history.checkpoints[g].mean(axis=0) for g in checks]), one),
+                "prior_lower": ("param", space["lower"].values.astype(float), per_param),
+                "prior_upper": ("param", space["upper"].values.astype(float), per_param),
+                "calibrated_lower": ("param", designs.min(axis=0), per_param),
+                "calibrated_upper": ("param", designs.max(axis=0), per_param),
+            },
+            coords={
+                "pareto": np.arange(len(designs)),
+                "param": names,
+                "param_unit": ("param", space["unit"].values.astype(str)),
+                "objective": list(p["variables"]),
+                "objective_unit": ("objective", objective_units),
+                "generation": np.arange(1, last + 1),
+                "snapshot": np.array(snaps, dtype=np.int64),
+                "member": np.arange(width),
+                "checkpoint": np.array(checks, dtype=np.int64),
+                "experiment": list(p["held_out"]),
+            },
+            attrs={
+                "training": p["training"],
+                "generations_run": int(last),
+                "stop_reason": history.stop_reason,
+                "seed": p["seed"],
+                "sigma_loss_final": float(history.checkpoints[last].mean()),
+                "objective_definition": "0.5 * sum_j (P_j - y_j)^2 over the training coreflood's PV points (Eq. 3.16)",
+                "heldout_misfit_definition": "||sim - obs||_2 / ||obs||_2 per held-out experiment and variable",
+                "hypervolume_definition": ("front objectives divided by the initial population's maxima, reference "
+                                           f"point {HV_REFERENCE} per objective"),
+                "hypervolume_scale": [float(s) for s in history.scale],
+            },
+        )
+        for dim in ("generation", "snapshot", "checkpoint"):
+            ds[dim].attrs["units"] = "generation"
+        return ds
