@@ -19,12 +19,13 @@ def spflow_register_stages(register):
     from spflow.plugins.screening.sobol_screening import SobolScreening
     from spflow.plugins.statistics.quantiles import Quantiles
     from spflow.plugins.surrogates.adaptive_design import AdaptivePCE
+    from spflow.plugins.surrogates.kriging_stage import GPStage, PCKStage
     from spflow.plugins.surrogates.pce_stage import PCEStage
     from spflow.plugins.surrogates.validation import SurrogateValidation
 
     for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
                   SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation,
-                  NSGA2Calibration, ParetoDesign):
+                  PCKStage, GPStage, NSGA2Calibration, ParetoDesign):
         register(stage)
 
 

@@ -1,0 +1,33 @@
+"""The ``gp`` surrogate kind: a plain Gaussian process, i.e. ordinary Kriging (constant trend; thesis Eq. 3.18 with
+P(ξ) = 1), with the same kernels, maximum-likelihood length scales, storage and output sharing as PC-Kriging
+(:mod:`.kriging_surrogate`). The baseline PC-Kriging is compared with.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .contract import register_surrogate_kind
+from .kriging_surrogate import KrigingSurrogate
+from .outputs import OutputIndex
+
+__all__ = ["GP"]
+
+
+@register_surrogate_kind
+class GP(KrigingSurrogate):
+    """Ordinary-Kriging Gaussian process; build with :meth:`fit` (or the ``gp`` stage)."""
+
+    kind = "gp"
+    label = "GP"
+
+    @classmethod
+    def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
+            y: np.ndarray, *, kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
+            restarts: int = 5, seed: int = 0, parallel=None) -> GP:
+        """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
+        constant = np.zeros((1, len(names)), dtype=np.int64)
+        orders = [np.zeros(1, dtype=np.int64)] * len(outputs)
+        return cls.fit_trends(names, lower, upper, outputs, x, y, constant, orders, mode="sequential",
+                              kernel=kernel, share=share, nugget=nugget, restarts=restarts, seed=seed,
+                              parallel=parallel)

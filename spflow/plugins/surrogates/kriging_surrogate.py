@@ -1,0 +1,240 @@
+"""Kriging surrogates behind the surrogate contract: the common part of PC-Kriging (kind ``pck``) and the plain GP
+(kind ``gp``), thesis §3.8, Eqs. 3.18-3.21.
+
+Output columns are split into *groups* that share one correlation kernel (one set of length scales, one Cholesky
+factor); every column keeps its own trend, GLS coefficients and process variance (:mod:`.kriging`).
+
+* ``share="output"`` (default): one group per column -- UQLab's treatment of vector outputs (one Kriging model per
+  output component), which the thesis used. On BCF1 (9 parameters, N = 200, dp and recovery at 44 PV steps each) it
+  was 2-6x more accurate on an independent LHS set than sharing.
+* ``share="variable"``: one group per (variable, experiment): the 44 time steps of a QoI share their length scales
+  (fitted on the sum of their likelihoods). Prediction is ~20x cheaper (one triangular product per QoI and batch
+  instead of one per column) -- the option for calibrations that call the proxy point by point 10^5 times.
+
+Measured numbers: ``benchmarks/bench_kriging.py`` and ``docs/surrogates.md``.
+
+Storage (no pickle): training inputs (physical units) and outputs, the trend multi-indices, each column's trend mask,
+GLS coefficients and process variance, the group of each column, each group's length scales and nugget, the
+kernel name and the Kriging LOO errors. :meth:`from_dataset` recomputes the Cholesky factors and GLS quantities from
+the training data and hyperparameters with the same code as the fit, so in one process it predicts exactly as the
+fitted object did. (Across processes BLAS may round differently; with a near-singular correlation matrix -- long
+length scales, condition number up to n/nugget ~ 10^10 -- the recomputed β̂ then differs from the stored one in the
+6th-7th digit, so the stored coefficients are a record, not a checksum.)
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+import xarray as xr
+
+from spflow.core.errors import ParameterError, SchemaError
+
+from .basis import design_matrix
+from .blas import single_threaded_blas
+from .contract import Surrogate
+from .kriging import KERNELS, UniversalKriging
+from .outputs import OutputIndex
+from .pck_modes import MODES, fit_group
+
+__all__ = ["KrigingSurrogate", "SHARING", "output_groups"]
+
+SHARING = ("output", "variable")
+
+
+def output_groups(outputs: OutputIndex, share: str) -> np.ndarray:
+    """Group number of every output column for the sharing rule ``share`` (see the module docstring)."""
+    if share not in SHARING:
+        raise ParameterError(f"Kriging hyperparameter sharing {share!r} is not known; allowed: {list(SHARING)}")
+    if share == "output":
+        return np.arange(len(outputs))
+    keys = [f"{v}\x00{e}" for v, e in zip(outputs.variable, outputs.experiment)]
+    return np.unique(keys, return_inverse=True)[1].ravel()
+
+
+class KrigingSurrogate(Surrogate):
+    """Universal Kriging of every output column with a (possibly constant-only) Legendre trend.
+
+    Subclasses set :attr:`kind` and build the trend candidates; construction from stored arrays is common.
+    """
+
+    #: Long name of the kind (error messages).
+    label: ClassVar[str] = "Kriging"
+
+    def __init__(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
+                 x: np.ndarray, y: np.ndarray, indices: np.ndarray, trend: np.ndarray, group: np.ndarray,
+                 lengthscale: np.ndarray, nugget: np.ndarray, kernel: str, info: dict):
+        lower, upper, x, y = self.check_training(names, lower, upper, outputs, x, y)
+        super().__init__(names, lower, upper, outputs)
+        self.x, self.y = x, y
+        self.indices = np.ascontiguousarray(indices, dtype=np.int64)
+        self.trend = np.asarray(trend, dtype=bool)
+        self.group = np.asarray(group, dtype=np.int64)
+        self.lengthscale = np.atleast_2d(np.asarray(lengthscale, dtype=float))
+        self.nugget = np.atleast_1d(np.asarray(nugget, dtype=float))
+        self.kernel = str(kernel)
+        self.info = dict(info)
+        self._check_shapes()
+        z = self.to_unit(self.x)
+        basis = design_matrix(z, self.indices)
+        self.coefficients = np.zeros((len(outputs), self.indices.shape[0]))
+        self.process_variance = np.zeros(len(outputs))
+        self.loo = np.zeros(len(outputs))
+        self._models = []
+        for g in range(self.lengthscale.shape[0]):
+            cols = np.flatnonzero(self.group == g)
+            used = self.trend[cols].any(axis=0)
+            model = UniversalKriging(z, self.y[:, cols], basis[:, used], self.trend[np.ix_(cols, used)], self.kernel,
+                                     self.lengthscale[g], self.nugget[g])
+            self.coefficients[np.ix_(cols, used)] = model.coefficients.T
+            self.process_variance[cols] = model.process_variance
+            self.loo[cols] = model.relative_loo()
+            self._models.append((cols, used, model))
+
+    def _check_shapes(self) -> None:
+        """The stored hyperparameters and trends fit the training data (checked by :meth:`check_training`)."""
+        d, m = len(self.names), len(self.outputs)
+        what = f"{self.label} surrogate"
+        if self.indices.ndim != 2 or self.indices.shape[1] != d:
+            raise ParameterError(f"{what}: multi-indices must be (term, {d}), got {self.indices.shape}")
+        if self.trend.shape != (m, self.indices.shape[0]):
+            raise ParameterError(f"{what}: trend mask must be (output, term) = ({m}, {self.indices.shape[0]}), got "
+                                 f"{self.trend.shape}")
+        n_groups = self.lengthscale.shape[0]
+        if self.group.shape != (m,) or set(self.group.tolist()) != set(range(n_groups)):
+            raise ParameterError(f"{what}: output groups must number the {n_groups} length-scale rows 0..{n_groups - 1}"
+                                 f" and cover all {m} outputs")
+        if self.lengthscale.shape != (n_groups, d) or self.nugget.shape != (n_groups,):
+            raise ParameterError(f"{what}: length scales must be (group, {d}) and nuggets (group,), got "
+                                 f"{self.lengthscale.shape} and {self.nugget.shape}")
+        if not (self.nugget >= 0).all():
+            raise ParameterError(f"{what}: nuggets must be >= 0, got {self.nugget}")
+        if self.kernel not in KERNELS:
+            raise ParameterError(f"{what}: kernel {self.kernel!r} is not known; allowed: {sorted(KERNELS)}")
+
+    # -- fitting ----------------------------------------------------------------------------------------------------
+    @classmethod
+    def check_options(cls, *, mode: str, kernel: str, share: str, nugget: float, restarts: int) -> None:
+        """Raise :class:`ParameterError` naming the first bad fitting option (before any work)."""
+        if mode not in MODES:
+            raise ParameterError(f"{cls.label}: mode {mode!r} is not known; allowed: {list(MODES)}")
+        if kernel not in KERNELS:
+            raise ParameterError(f"{cls.label}: kernel {kernel!r} is not known; allowed: {sorted(KERNELS)}")
+        if share not in SHARING:
+            raise ParameterError(f"{cls.label}: share {share!r} is not known; allowed: {list(SHARING)}")
+        if isinstance(restarts, bool) or not (isinstance(restarts, (int, np.integer)) and restarts >= 1):
+            raise ParameterError(f"{cls.label}: restarts must be an integer >= 1, got {restarts!r}")
+        if not (isinstance(nugget, (int, float)) and np.isfinite(nugget) and 0 <= nugget <= 0.1):
+            raise ParameterError(f"{cls.label}: nugget must be a number in [0, 0.1], got {nugget!r}")
+
+    @classmethod
+    def check_training(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
+                       x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``lower``, ``upper``, ``x`` (n, d), ``y`` (n, m) as float arrays; shapes, finiteness and the box checked."""
+        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        y = np.asarray(y, dtype=float)
+        y = y[:, None] if y.ndim == 1 else y
+        d, m = len(names), len(outputs)
+        if x.ndim != 2 or x.shape[1] != d or y.shape != (x.shape[0], m):
+            raise ParameterError(f"{cls.label}: need x (n, {d}) and y (n, {m}) for parameters {list(names)} and "
+                                 f"{m} outputs; got x {x.shape}, y {y.shape}")
+        if x.shape[0] < 3:
+            raise ParameterError(f"{cls.label}: need at least 3 training points, got {x.shape[0]}")
+        if not (np.isfinite(x).all() and np.isfinite(y).all()):
+            raise ParameterError(f"{cls.label}: training x and y must be finite")
+        if lower.shape != (d,) or upper.shape != (d,) or not np.all(lower < upper):
+            raise ParameterError(f"{cls.label}: bounds must satisfy lower < upper for each of the {d} parameters")
+        slack = 1e-9 * (upper - lower)
+        if ((x < lower - slack) | (x > upper + slack)).any():
+            raise ParameterError(f"{cls.label}: training points must lie in the box lower={lower}, upper={upper}")
+        return lower, upper, x, y
+
+    @classmethod
+    def fit_trends(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
+                   x: np.ndarray, y: np.ndarray, indices: np.ndarray, orders: list[np.ndarray], *, mode: str,
+                   kernel: str, share: str, nugget: float, restarts: int, seed: int, parallel=None,
+                   info: dict | None = None) -> KrigingSurrogate:
+        """Fit length scales (and, in ``optimal`` mode, trend sizes) group by group and build the surrogate.
+
+        ``indices`` (P, d) are the trend candidates; ``orders[j]`` ranks column j's candidates (rows of ``indices``).
+        ``parallel`` (a :class:`joblib.Parallel`) spreads the groups over workers.
+        """
+        cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
+        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
+        if len(orders) != y.shape[1]:
+            raise ParameterError(f"{cls.label}: need one trend order per output ({y.shape[1]}), got {len(orders)}")
+        group = output_groups(outputs, share)
+        z = 2.0 * (x - lower) / (upper - lower) - 1.0
+        basis = design_matrix(z, indices)
+        seeds = np.random.SeedSequence(seed).generate_state(group.max() + 1)
+        jobs = []
+        for g in range(group.max() + 1):
+            cols = np.flatnonzero(group == g)
+            used = np.unique(np.concatenate([orders[j] for j in cols]))
+            local = [np.searchsorted(used, orders[j]) for j in cols]
+            jobs.append((cols, used, (z, y[:, cols], basis[:, used], local, mode, kernel, nugget, restarts,
+                                      int(seeds[g]))))
+        if parallel is None:
+            results = [fit_group(*args) for _, _, args in jobs]
+        else:
+            from joblib import delayed
+
+            results = parallel(delayed(fit_group)(*args) for _, _, args in jobs)
+        trend = np.zeros((y.shape[1], indices.shape[0]), dtype=bool)
+        lengthscale = np.empty((len(jobs), len(names)))
+        for g, ((cols, used, _), (mask, lengths)) in enumerate(zip(jobs, results)):
+            trend[np.ix_(cols, used)] = mask
+            lengthscale[g] = lengths
+        info = {"mode": mode, "share": share, "restarts": restarts, "seed": seed, **(info or {})}
+        return cls(names, lower, upper, outputs, x, y, indices, trend, group, lengthscale,
+                   np.full(len(jobs), float(nugget)), kernel, info)
+
+    # -- prediction -------------------------------------------------------------------------------------------------
+    def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        z = self.to_unit(x)
+        basis = design_matrix(z, self.indices)
+        mean = np.empty((z.shape[0], len(self.outputs)))
+        var = np.empty_like(mean)
+        with single_threaded_blas():  # many small products: one limit around all the groups
+            for cols, used, model in self._models:
+                mean[:, cols], var[:, cols] = model.predict(z, basis[:, used])
+        return mean, var
+
+    # -- storage ----------------------------------------------------------------------------------------------------
+    def to_dataset(self) -> xr.Dataset:
+        return self._dataset(
+            {"train_x": (("train", "param"), self.x, {"units": "per-parameter (physical)"}),
+             "train_y": (("train", "output"), self.y, {"units": "output units (units_<variable>)"}),
+             "multi_index": (("term", "param"), self.indices, {"units": "1"}),
+             "trend": (("output", "term"), self.trend.astype(np.int8),
+                       {"units": "1", "long_name": "1 if the term is in the output's Kriging trend"}),
+             "coefficients": (("output", "term"), self.coefficients,
+                              {"units": "output units (units_<variable>)", "long_name": "GLS trend coefficients"}),
+             "process_variance": ("output", self.process_variance,
+                                  {"units": "output units squared", "long_name": "Kriging process variance σ²"}),
+             "output_group": ("output", self.group, {"units": "1", "long_name": "length-scale group of the output"}),
+             "lengthscale": (("group", "param"), self.lengthscale,
+                             {"units": "1 (auxiliary space [-1, 1])",
+                              "long_name": "correlation length ℓ; Eq. 3.20's θ = sqrt(2) ℓ for the gaussian kernel"}),
+             "nugget": ("group", self.nugget, {"units": "1", "long_name": "added to the correlation diagonal"}),
+             "loo": ("output", self.loo, {"units": "1", "long_name": "Kriging LOO error ε_LOO (Eq. 3.8, Dubrule)"})},
+            coords={"term": np.arange(self.indices.shape[0]), "train": np.arange(self.x.shape[0]),
+                    "group": np.arange(self.lengthscale.shape[0])},
+            attrs={"kernel": self.kernel, "loo_mean": float(np.mean(self.loo)), **self.info},
+        )
+
+    @classmethod
+    def from_dataset(cls, ds: xr.Dataset) -> KrigingSurrogate:
+        needed = ("train_x", "train_y", "multi_index", "trend", "coefficients", "output_group", "lengthscale", "nugget")
+        missing = [v for v in needed if v not in ds.variables]
+        if missing or "kernel" not in ds.attrs:
+            raise SchemaError(f"{cls.label} surrogate Dataset lacks {missing or ['attrs.kernel']}")
+        info = {k: ds.attrs[k] for k in ds.attrs
+                if k not in ("surrogate", "kernel", "loo_mean") and not k.startswith("units_")}
+        return cls(**cls._common(ds), x=ds["train_x"].transpose("train", "param").values,
+                   y=ds["train_y"].transpose("train", "output").values, indices=ds["multi_index"].values,
+                   trend=ds["trend"].values.astype(bool), group=ds["output_group"].values,
+                   lengthscale=ds["lengthscale"].values, nugget=ds["nugget"].values, kernel=ds.attrs["kernel"],
+                   info=info)

@@ -1,0 +1,46 @@
+"""The ``pck`` surrogate kind: PC-Kriging (thesis §3.8, Eq. 3.19; Schöbi, Sudret & Wiart 2015).
+
+The trend candidates come from a sparse PCE: the degree/q-norm-adaptive hybrid-LARS fit of :mod:`.degree_adaptive`
+(Algorithm 2's basis search) picks the basis, and hybrid LARS (:mod:`.lars`) on that basis ranks and selects each
+output's polynomials. :mod:`.pck_modes` then calibrates universal Kriging on them (``sequential`` or ``optimal``);
+the GLS trend coefficients are re-estimated by Kriging, not taken from the PCE.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .basis import design_matrix
+from .contract import register_surrogate_kind
+from .degree_adaptive import fit_pce
+from .kriging_surrogate import KrigingSurrogate
+from .lars import hybrid_lars_outputs
+from .outputs import OutputIndex
+
+__all__ = ["PCK"]
+
+
+@register_surrogate_kind
+class PCK(KrigingSurrogate):
+    """PC-Kriging; build with :meth:`fit` (or the ``pck`` stage)."""
+
+    kind = "pck"
+    label = "PC-Kriging"
+
+    @classmethod
+    def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
+            y: np.ndarray, *, degree_max: int = 3, q: float = 0.9, mode: str = "sequential",
+            kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8, restarts: int = 5, seed: int = 0,
+            parallel=None) -> PCK:
+        """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
+        cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
+        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
+        z = 2.0 * (x - lower) / (upper - lower) - 1.0
+        pce = fit_pce(z, y, degree_max=degree_max, q=q, solver="lars", parallel=parallel)
+        ranked = [r.active for r in hybrid_lars_outputs(design_matrix(z, pce.indices), y)]
+        used = np.unique(np.concatenate(ranked))  # keep only the terms some output's trend can use
+        orders = [np.searchsorted(used, r) for r in ranked]
+        info = {"pce_degree": pce.degree, "pce_q": pce.q, "pce_loo_mean": pce.loo_mean}
+        return cls.fit_trends(names, lower, upper, outputs, x, y, pce.indices[used], orders, mode=mode,
+                              kernel=kernel, share=share, nugget=nugget, restarts=restarts, seed=seed,
+                              parallel=parallel, info=info)
