@@ -7,8 +7,11 @@ from spflow.core.hookspecs import hookimpl
 
 @hookimpl
 def spflow_register_stages(register):
+    from spflow.plugins.calibration.emcee_sampler import EmceeSampler
+    from spflow.plugins.calibration.mh_sampler import MHSampler
     from spflow.plugins.calibration.nsga2_pareto_design import ParetoDesign
     from spflow.plugins.calibration.nsga2_stage import NSGA2Calibration
+    from spflow.plugins.calibration.posterior_predictive import PosteriorPredictive
     from spflow.plugins.data import LoadNetCDF
     from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
     from spflow.plugins.design.parameter_space import ParameterSpace
@@ -25,7 +28,7 @@ def spflow_register_stages(register):
 
     for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
                   SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation,
-                  PCKStage, GPStage, NSGA2Calibration, ParetoDesign):
+                  PCKStage, GPStage, NSGA2Calibration, ParetoDesign, EmceeSampler, MHSampler, PosteriorPredictive):
         register(stage)
 
 

@@ -1,0 +1,118 @@
+"""Chapter-4 Bayesian history matching: forward model -> design -> PCE proxy -> MCMC -> posterior predictive on BCF1-3.
+
+The thesis's §4.5-4.6 as one cached DAG on the bundled corefloods (or any coreflood files, e.g. synthetic twins):
+
+1. ``space``: the Table 4.1 ranges (uniform prior, Eq. 4.2).
+2. ``design`` (Latin hypercube) -> ``responses`` (simulator on the training coreflood BCF1) -> ``surrogate``: the
+   ``pce`` stage on pressure drop and oil cut of BCF1 (§4.5). Swap the proxy with ``surrogate="pck"`` (or
+   ``p.set_stage("surrogate", "pck", {...})``): every surrogate stage has the same inputs and output.
+3. ``observations`` -> ``posterior``: ``emcee_sampler`` (default) or ``mh_sampler`` (``sampler="mh_sampler"``, the
+   thesis's Metropolis-Hastings), Gaussian likelihood per QoI with its own Jeffreys noise level integrated out and the
+   proxy's error variance added (Eqs. 4.1-4.5), thesis budget 10^5 / 20 000 / 5 per chain, 4 chains.
+4. ``predictive``: the simulator on 200 posterior draws for BCF1 (training) and BCF2/BCF3 (held out): quantile bands
+   with and without measurement noise and the coverage of the observations (Figs. 4.4-4.5).
+5. ``prior_design`` -> ``prior_responses`` -> ``prior_bands``: the prior response spread, drawn under Fig. 4.5.
+
+    spflow run bayesian_calibration --jobs 2
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+import spflow
+from spflow.plugins.design.thesis_tables import TABLE_4_1
+
+EXPERIMENTS = ["BCF1", "BCF2", "BCF3"]
+QOIS = ["dp", "oil_cut"]
+LEVELS = [0.05, 0.5, 0.95]
+
+
+def pipeline(samples: int = 300, cells: int = 100, degree_max: int = 3, sampler: str = "emcee_sampler",
+             surrogate: str = "pce", chains: int = 4, mcmc_samples: int = 100_000, burn: int = 20_000,
+             thin: int = 5, draws: int = 200, prior_draws: int = 64, seed: int = 2024,
+             observed: list[str] | None = None) -> spflow.Pipeline:
+    """The chapter-4 DAG. ``observed``: bundled names or coreflood files for BCF1-3 (default: the bundled data)."""
+    model = {"cells": cells}
+    p = spflow.Pipeline("bayesian_calibration")
+    p.add("space", "parameter_space", params={"names": list(TABLE_4_1), "ranges": TABLE_4_1})
+    p.add("design", "lhs_design", inputs={"space": "space"}, params={"samples": samples, "seed": seed})
+    p.add("responses", "forward", inputs={"design": "design"}, params={"experiments": ["BCF1"], **model})
+    proxy = {"variables": QOIS, "experiments": ["BCF1"]}
+    p.add("surrogate", surrogate, inputs={"space": "space", "design": "design", "responses": "responses"},
+          params=proxy | ({"degree_max": degree_max} if surrogate == "pce" else {}))
+    p.add("observations", "observations", params={"experiments": list(observed or EXPERIMENTS)})
+    p.add("posterior", sampler, inputs={"surrogate": "surrogate", "observations": "observations", "space": "space"},
+          params={"experiments": ["BCF1"], "variables": QOIS, "chains": chains, "samples": mcmc_samples,
+                  "burn": burn, "thin": thin, "seed": seed})
+    p.add("predictive", "posterior_predictive",
+          inputs={"posterior": "posterior", "space": "space", "observations": "observations"},
+          params={"experiments": EXPERIMENTS, "draws": draws, "levels": LEVELS, "seed": seed, **model})
+    p.add("prior_design", "lhs_design", inputs={"space": "space"}, params={"samples": prior_draws, "seed": seed + 1})
+    p.add("prior_responses", "forward", inputs={"design": "prior_design"}, params={"experiments": EXPERIMENTS, **model})
+    p.add("prior_bands", "quantiles", inputs={"ensemble": "prior_responses"}, params={"levels": LEVELS})
+    return p
+
+
+def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | None = None) -> list[str]:
+    """Appendix B-E figures, Figs. 4.4-4.5, the posterior and predictive Datasets, and a summary table."""
+    from spflow.plugins.calibration import mcmc_figures as fig
+    from spflow.plugins.calibration.diagnostics import summary
+
+    posterior, bands = result["posterior"], result["predictive"]
+    observations, prior = result["observations"], result["prior_bands"]
+    posterior.to_netcdf(outdir / "posterior.nc")
+    bands.to_netcdf(outdir / "predictive.nc")
+    written = [
+        fig.trace_figure(posterior, outdir / "fig_b1_traces.png"),
+        fig.autocorrelation_figure(posterior, outdir / "fig_c1_autocorrelation.png"),
+        fig.prior_posterior_figure(posterior, outdir / "fig_d1_prior_posterior.png", truth=truth),
+        fig.geweke_figure(posterior, outdir / "fig_e1_geweke.png"),
+        fig.predictive_figure(bands, observations, ["BCF1"], outdir / "fig_4_4_bcf1.png", prior=prior,
+                              title="Fig. 4.4: posterior prediction of the training coreflood BCF1"),
+        fig.predictive_figure(bands, observations, ["BCF2", "BCF3"], outdir / "fig_4_5_heldout.png", prior=prior,
+                              title="Fig. 4.5: posterior prediction of the held-out corefloods BCF2, BCF3"),
+    ]
+    table = summary(posterior)
+    noise = summary(posterior, "sigma", "block")
+    lines = [f"wrote {len(written)} figures, posterior.nc and predictive.nc to {outdir}",
+             f"sampler {posterior.attrs['sampler']} ({posterior.sizes['chain']} chains x {posterior.sizes['draw']} "
+             f"draws), noise {posterior.attrs['noise']}, surrogate {posterior.attrs['surrogate']}, acceptance "
+             f"{float(posterior['acceptance'].mean()):.2f}",
+             "parameter   mean        sd          95% interval              R-hat  ESS-bulk  Geweke z"
+             + ("  truth" if truth else "")]
+    for name in table["param"].values:
+        row = table.sel(param=name)
+        inside = ""
+        if truth and name in truth:
+            inside = f"  {truth[name]:.4g} {'in' if row.q025 <= truth[name] <= row.q975 else 'OUT'}"
+        lines.append(f"{name:<10}  {float(row['mean']):<10.4g}  {float(row.sd):<10.3g}  [{float(row.q025):<9.4g}, "
+                     f"{float(row.q975):<9.4g}]  {float(row.rhat):5.3f}  {float(row.ess_bulk):8.0f}  "
+                     f"{float(row.geweke_z):+7.2f}{inside}")
+    for block in noise["block"].values:
+        row = noise.sel(block=block)
+        lines.append(f"noise sigma {block}: {float(row['mean']):.4g} (95% [{float(row.q025):.4g}, "
+                     f"{float(row.q975):.4g}])")
+    for var in QOIS:
+        if f"coverage_{var}" in bands:
+            cover = ", ".join(f"{e} {100 * float(bands[f'coverage_{var}'].sel(experiment=e)):.0f}% "
+                              f"(model only {100 * float(bands[f'model_coverage_{var}'].sel(experiment=e)):.0f}%)"
+                              for e in bands["experiment"].values)
+            lines.append(f"{round(100 * (bands.attrs['band_high'] - bands.attrs['band_low']))}% band coverage of "
+                         f"{var}: {cover}")
+    seconds = {node: result.store.record(key).get("seconds") for node, key in result.keys.items()}
+    lines.append("node seconds (when computed): " + ", ".join(f"{n} {s:.1f}" for n, s in seconds.items() if s))
+    return lines
+
+
+def held_out_coverage(bands, experiments=("BCF2", "BCF3"), variables=tuple(QOIS)) -> float:
+    """Fraction of all finite held-out observations inside the predictive band (pooled over QoIs and experiments)."""
+    inside = total = 0.0
+    for var in variables:
+        for e in experiments:
+            n = float(bands[f"points_{var}"].sel(experiment=e))
+            inside += n * float(bands[f"coverage_{var}"].sel(experiment=e))
+            total += n
+    return inside / total if total else np.nan

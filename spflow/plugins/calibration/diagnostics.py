@@ -1,0 +1,128 @@
+"""Convergence diagnostics of MCMC draws (thesis appendices C and E): autocorrelation, Geweke z-scores with spectral
+variance, and ArviZ's rank-normalised split R-hat and bulk/tail ESS.
+
+**Geweke (App. E, Eq. E.1).** z = (θ̄_A − θ̄_B) / sqrt(Ŝ_A(0)/n_A + Ŝ_B(0)/n_B) with A the first ``first`` = 10 % and
+B the last ``last`` = 50 % of a chain. Ŝ(0) is the spectral density at frequency zero, Ŝ(0) = τ_int · s² (τ_int the
+integrated autocorrelation time from emcee's Sokal-windowed estimator, s² the segment's variance), so the
+denominator is the Monte Carlo standard error of each segment mean of a correlated chain (``shared/notes/uq.md``
+§4.2). The thesis's Eq. E.1 and the old PyMC3 ``geweke`` used plain variances, which ignore the autocorrelation and
+inflate |z| by about sqrt(τ_int). τ_int is estimated once on the whole chain: under the null hypothesis
+(stationarity) both segments share it, and estimated on a 10 % segment only a few τ long it is badly biased low (on
+AR(1) chains of 888 draws, φ = 0.9-0.95, per-segment estimates gave z with a spread of 1.7-2.1 instead of about
+1.2). Several chains of the same target are treated as replicas: their segment means are averaged, the variance of
+that average is τ s² / (n · chains) with the autocorrelation function averaged over chains.
+
+For emcee, whose walkers within one run are correlated through the ensemble moves, the Geweke test is applied to
+each run's walker-mean series (a function of the ensemble's Markov state, so its spectral variance includes the
+cross-walker correlation), the runs being the replicas (:func:`independent_series`).
+
+**R-hat / ESS** come from ArviZ (``az.rhat`` rank-normalised split R-hat, ``az.ess`` bulk and tail; Vehtari et al.
+2021). ArviZ 0.2x announces its 1.0 refactor with a FutureWarning on import; it is silenced here only.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import emcee
+import numpy as np
+import xarray as xr
+
+from spflow.core.errors import ParameterError
+
+__all__ = ["arviz", "integrated_time", "geweke", "geweke_intervals", "autocorrelation",
+           "independent_series", "summary"]
+
+
+def arviz():
+    """The ``arviz`` module, imported with its refactor FutureWarning silenced."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        import arviz as az
+    return az
+
+
+def _chains(x: np.ndarray) -> np.ndarray:
+    """``x`` as (chain, draw): a 1-D series is one chain."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim == 1:
+        x = x[None, :]
+    if x.ndim != 2 or x.shape[1] < 4:
+        raise ParameterError(f"MCMC diagnostics need draws of shape (chain, draw) with >= 4 draws, got {x.shape}")
+    return x
+
+
+def integrated_time(x: np.ndarray) -> float:
+    """τ_int of draws (chain, draw): emcee's Sokal-windowed estimate (c = 5) on the chain-averaged autocorrelation.
+
+    No length check is made (emcee's ``tol``); a short chain gives a lower bound, which ESS reports separately."""
+    x = _chains(x)
+    return float(emcee.autocorr.integrated_time(x.T[:, :, None], c=5, tol=0)[0])
+
+
+def geweke(x: np.ndarray, first: float = 0.1, last: float = 0.5) -> float:
+    """Geweke's z of draws (chain, draw) (or one chain (draw,)) with spectral variances (module docstring)."""
+    if not (0 < first < 1 and 0 < last < 1 and first + last <= 1):
+        raise ParameterError(f"Geweke segments: need 0 < first, last < 1 and first + last <= 1, got {first}, {last}")
+    x = _chains(x)
+    n = x.shape[1]
+    a, b = x[:, : max(int(first * n), 4)], x[:, n - max(int(last * n), 4):]
+    tau = integrated_time(x)
+    chains = x.shape[0]
+    se2 = tau * (np.mean(np.var(a, axis=1)) / a.shape[1] + np.mean(np.var(b, axis=1)) / b.shape[1]) / chains
+    return float((a.mean() - b.mean()) / np.sqrt(se2))
+
+
+def geweke_intervals(x: np.ndarray, first: float = 0.1, last: float = 0.5,
+                     intervals: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """z-scores of sub-chains starting at ``intervals`` points of the first half (the App. E plot): (starts, z)."""
+    x = _chains(x)
+    starts = np.linspace(0, x.shape[1] // 2, intervals).astype(int)
+    return starts, np.array([geweke(x[:, s:], first, last) for s in starts])
+
+
+def autocorrelation(x: np.ndarray, max_lag: int = 100) -> np.ndarray:
+    """Autocorrelation ρ_k (Eq. C.1) for k = 0..max_lag, averaged over chains (emcee's FFT estimator)."""
+    x = _chains(x)
+    acf = np.mean([emcee.autocorr.function_1d(chain) for chain in x], axis=0)
+    return acf[: max_lag + 1]
+
+
+def independent_series(posterior: xr.Dataset, variable: str = "theta", dim: str = "param") -> np.ndarray:
+    """Draws (series, draw, dim) of independent Markov chains: the chains themselves, or for emcee output (chains
+    labelled by ``chain_run``) the walker mean of each run."""
+    da = posterior[variable].transpose("chain", "draw", dim)
+    if "chain_run" in posterior.coords:
+        da = da.groupby(posterior["chain_run"]).mean("chain").rename(chain_run="chain").transpose("chain", "draw", dim)
+    return da.values
+
+
+def summary(posterior: xr.Dataset, variable: str = "theta", dim: str = "param") -> xr.Dataset:
+    """Per ``dim`` entry of ``posterior[variable]`` (chain, draw, dim): mean, sd, 2.5/50/97.5 % quantiles, R-hat,
+    bulk and tail ESS, τ_int (walker- or chain-averaged autocorrelation) and the Geweke z of the independent series."""
+    az = arviz()
+    da = posterior[variable].transpose("chain", "draw", dim)
+    sub = xr.Dataset({variable: da})
+    values = da.values
+    series = independent_series(posterior, variable, dim)
+    out = xr.Dataset(
+        {
+            "mean": (dim, values.mean(axis=(0, 1))),
+            "sd": (dim, values.std(axis=(0, 1), ddof=1)),
+            "q025": (dim, np.quantile(values, 0.025, axis=(0, 1))),
+            "q500": (dim, np.quantile(values, 0.5, axis=(0, 1))),
+            "q975": (dim, np.quantile(values, 0.975, axis=(0, 1))),
+            "rhat": (dim, az.rhat(sub)[variable].values),
+            "ess_bulk": (dim, az.ess(sub, method="bulk")[variable].values),
+            "ess_tail": (dim, az.ess(sub, method="tail")[variable].values),
+            "tau_int": (dim, [integrated_time(values[:, :, k]) for k in range(values.shape[2])]),
+            "geweke_z": (dim, [geweke(series[:, :, k]) for k in range(values.shape[2])]),
+        },
+        coords={dim: da[dim].values},
+    )
+    units = {"mean": da.attrs.get("units", ""), "sd": da.attrs.get("units", ""), "q025": da.attrs.get("units", ""),
+             "q500": da.attrs.get("units", ""), "q975": da.attrs.get("units", ""), "rhat": "1", "ess_bulk": "draws",
+             "ess_tail": "draws", "tau_int": "draws", "geweke_z": "1"}
+    for name, unit in units.items():
+        out[name].attrs["units"] = unit
+    return out

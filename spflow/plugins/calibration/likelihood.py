@@ -1,0 +1,136 @@
+"""The posterior of thesis §4.6: uniform prior on the box (Eq. 4.2) times a Gaussian likelihood per QoI block (Eq. 4.3)
+with the forward model replaced by a surrogate (Eq. 4.5).
+
+A block is one (variable, experiment) pair — e.g. pressure drop of BCF1 on the 0.1 PV grid — with its own noise
+level σ_i. Three treatments of σ_i (``noise``):
+
+* ``"jeffreys_marginal"`` (default): σ_i under Jeffreys' prior (Eq. 4.4) integrated out (:mod:`.jeffreys`);
+* ``"jeffreys_sampled"``: log σ_i are extra MCMC coordinates with the same prior (flat in log σ when v ≡ 0);
+* ``"known"``: σ_i given.
+
+The surrogate's own error variance v_k(θ) (``Surrogate.predict``'s variance: the PCE's LOO error, the Kriging
+variance) adds to the measurement variance point by point, d_k ~ N(f_k(θ), σ_i² + v_k(θ)), when
+``surrogate_variance`` is on. How that enters the marginal (and why the plain 1/σ prior then fails) is documented in
+:mod:`.jeffreys`.
+
+Everything is vectorised over rows of parameter vectors (emcee walkers, independent MH chains): one surrogate call per
+batch, only for the rows inside the box.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spflow.core.errors import ParameterError
+from spflow.plugins.surrogates.contract import Surrogate
+
+from . import jeffreys
+from .aligned_data import AlignedData
+
+__all__ = ["NOISE_MODES", "PosteriorModel"]
+
+NOISE_MODES = ("jeffreys_marginal", "jeffreys_sampled", "known")
+_LOG_2PI = np.log(2.0 * np.pi)
+
+
+@dataclass
+class PosteriorModel:
+    """log posterior of θ (and of log σ_i when sampled) given a surrogate and aligned observations.
+
+    ``lower``/``upper`` is the prior box in the surrogate's parameter order; ``pairs`` the blocks; ``sigma`` the known
+    noise levels (``noise="known"`` only, one per block, in the block's units).
+    """
+
+    surrogate: Surrogate
+    aligned: AlignedData
+    pairs: list[tuple[str, str]]
+    lower: np.ndarray
+    upper: np.ndarray
+    noise: str = "jeffreys_marginal"
+    sigma: tuple[float, ...] = ()
+    surrogate_variance: bool = True
+
+    def __post_init__(self):
+        if self.noise not in NOISE_MODES:
+            raise ParameterError(f"noise must be one of {NOISE_MODES}, got {self.noise!r}")
+        if self.noise == "known":
+            if len(self.sigma) != len(self.pairs) or not all(np.isfinite(s) and s > 0 for s in self.sigma):
+                raise ParameterError(f"noise='known' needs sigma = one positive value per block {self.pairs}, "
+                                     f"got {list(self.sigma)}")
+        self.lower = np.asarray(self.lower, dtype=float)
+        self.upper = np.asarray(self.upper, dtype=float)
+        self.columns = [self.aligned.blocks[p][0] for p in self.pairs]
+        self.observed = [self.aligned.blocks[p][1] for p in self.pairs]
+        self.log_prior_density = -float(np.sum(np.log(self.upper - self.lower)))
+
+    @property
+    def n_theta(self) -> int:
+        return self.lower.size
+
+    @property
+    def ndim(self) -> int:
+        """Sampled coordinates: θ, then log σ_i per block when ``noise="jeffreys_sampled"``."""
+        return self.n_theta + (len(self.pairs) if self.noise == "jeffreys_sampled" else 0)
+
+    def points(self) -> list[int]:
+        return [obs.size for obs in self.observed]
+
+    def inside(self, theta: np.ndarray) -> np.ndarray:
+        return np.all((theta >= self.lower) & (theta <= self.upper), axis=1)
+
+    def _blocks(self, theta: np.ndarray):
+        """Residuals and surrogate variances (rows, n_i) of every block at θ (rows inside the box)."""
+        mean, var = self.surrogate.predict(theta)
+        for cols, obs in zip(self.columns, self.observed):
+            v = var[:, cols] if self.surrogate_variance else np.zeros((theta.shape[0], cols.size))
+            yield obs - mean[:, cols], np.clip(v, 0.0, None)
+
+    def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(log posterior, log likelihood), each (rows,), at coordinates ``x`` (rows, ndim); −inf outside the box."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        log_post = np.full(x.shape[0], -np.inf)
+        log_lik = np.full(x.shape[0], -np.inf)
+        theta = x[:, : self.n_theta]
+        ok = np.flatnonzero(self.inside(theta))
+        if not ok.size:
+            return log_post, log_lik
+        lik = np.zeros(ok.size)
+        prior = np.full(ok.size, self.log_prior_density)
+        for i, (r, v) in enumerate(self._blocks(theta[ok])):
+            if self.noise == "jeffreys_marginal":
+                lik += jeffreys.log_marginal(r, v)
+                continue
+            if self.noise == "known":
+                sigma = np.full(ok.size, self.sigma[i])
+            else:
+                sigma = np.exp(x[ok, self.n_theta + i])
+                prior += jeffreys.log_sigma_prior(sigma, v)
+            total = sigma[:, None] ** 2 + v
+            lik += -0.5 * np.sum(_LOG_2PI + np.log(total) + r * r / total, axis=1)
+        log_lik[ok] = lik
+        log_post[ok] = lik + prior
+        return log_post, log_lik
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """emcee's vectorised log-probability: rows of (log posterior, log likelihood) — the second is a blob."""
+        return np.column_stack(self.evaluate(x))
+
+    def noise_draws(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """σ_i (rows, n_blocks) for each coordinate row: read off when sampled or known, drawn from p(σ_i | θ, d)
+        when marginalised (exact joint draws of (θ, σ))."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        if self.noise == "jeffreys_sampled":
+            return np.exp(x[:, self.n_theta:])
+        if self.noise == "known":
+            return np.tile(np.asarray(self.sigma, dtype=float), (x.shape[0], 1))
+        out = np.empty((x.shape[0], len(self.pairs)))
+        for i, (r, v) in enumerate(self._blocks(x[:, : self.n_theta])):
+            out[:, i] = jeffreys.sample_sigma(r, v, rng)
+        return out
+
+    def initial_log_sigma(self, theta: np.ndarray) -> np.ndarray:
+        """Profile values log sqrt(S_i/n_i) at θ (rows, n_blocks): a starting point for sampled noise levels."""
+        return np.column_stack([0.5 * np.log(np.mean(r * r, axis=1) + np.mean(v, axis=1) + 1e-300)
+                                for r, v in self._blocks(theta)])
