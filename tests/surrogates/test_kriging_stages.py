@@ -9,30 +9,7 @@ import spflow
 from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.contract import load_surrogate
 from spflow.plugins.surrogates.kriging_stage import GPStage, PCKStage
-from spflow.plugins.surrogates.pce_stage import PCEStage
 from spflow.plugins.surrogates.training_data import training_set
-
-
-class SurrogatePlugin:
-    """Registers the surrogate stages that the built-in plugin does not (yet) register."""
-
-    def __init__(self, stages):
-        self.stages = stages
-
-    @spflow.hookimpl
-    def spflow_register_stages(self, register):
-        for cls in self.stages:
-            register(cls)
-
-
-@pytest.fixture
-def surrogate_stages():
-    missing = [c for c in (PCEStage, PCKStage, GPStage) if c.name not in spflow.get_registry().stages]
-    if missing:
-        spflow.register_plugin(SurrogatePlugin(missing), name="kriging_test_plugin")
-    yield
-    if missing:
-        spflow.unregister_plugin("kriging_test_plugin")
 
 
 def _pipeline():
@@ -48,7 +25,7 @@ def _pipeline():
     return p
 
 
-def test_pipeline_swaps_pce_for_pck_and_gp(surrogate_stages, tmp_path):
+def test_pipeline_swaps_pce_for_pck_and_gp(tmp_path):
     p = _pipeline()
     first = spflow.run(p, cache=tmp_path, verbose=False)
     assert first["proxy"].attrs["surrogate"] == "pce"
