@@ -15,7 +15,8 @@ Per step (all in pore-volume units, see ``transport``):
 5. explicit conservative update of the six components with the TVD (or upwind) fluxes; a step that would make a
    saturation or concentration negative beyond round-off is retried with half the step, and fails as a time-step
    collapse after 60 halvings;
-6. backward-Euler dispersion of surfactant, polymer, anions and divalent cations (operator split, conservative).
+6. backward-Euler dispersion of surfactant, polymer, anions and divalent cations (operator split, conservative),
+   the four tridiagonal systems solved in one batched sweep (``transport.solve_dispersion``).
 
 Returns ``(status, info, n_steps, series, profiles, totals)``; ``status`` is a ``state_layout`` error code and
 ``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell. ``totals[4, 6]`` holds, per component, the
@@ -39,6 +40,9 @@ N_SERIES = 6
 P_SW, P_SO, P_SME, P_CP, P_CS, P_SAL, P_PRES, P_ADS3, P_ADS4, P_OIL, P_IFT = range(11)
 N_PROFILE = 11
 N_INFO = 12
+# dispersion rows
+D_ANION, D_DIVALENT, D_SURF, D_POLY = range(4)
+N_DISP = 4
 
 NEG_TOL = 1.0e-10
 MAX_HALVINGS = 60
@@ -46,12 +50,10 @@ MAX_HALVINGS = 60
 
 @njit(cache=True, error_model="numpy")
 def _properties(st, pr, prm, n, dt_s, info, t):
-    for i in range(n):
-        code = cell_properties(i, st, pr, prm, dt_s)
-        if code != L.OK:
-            _fill_info(info, t, i, st, pr, 0.0)
-            return code
-    return L.OK
+    code, i = cell_properties(st, pr, prm, n, dt_s)
+    if code != L.OK:
+        _fill_info(info, t, i, st, pr, 0.0)
+    return code
 
 
 @njit(cache=True, error_model="numpy")
@@ -63,6 +65,23 @@ def _fill_info(info, t, i, st, pr, dt):
     for l in range(3):
         info[8 + l] = pr[L.S1 + l, i]
     info[11] = dt
+
+
+@njit(cache=True, error_model="numpy")
+def _first_nonfinite(st, n):
+    """First cell with a non-finite conserved amount (rows M1..M6), or -1 (a branch-free scan first: the search
+    only runs after a failure)."""
+    finite = True
+    for r in range(6):
+        for i in range(n):
+            finite &= math.isfinite(st[r, i])
+    if finite:
+        return -1
+    for i in range(n):
+        for r in range(6):
+            if not math.isfinite(st[r, i]):
+                return i
+    return -1
 
 
 @njit(cache=True, error_model="numpy")
@@ -96,13 +115,14 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
     pr = np.zeros((L.NPR, n))
     flux = np.zeros((T.NFLUX, n + 1))
     new = np.zeros((6, n))
-    jd = np.zeros(n + 1)
-    work_c = np.zeros(n)
-    work_d = np.zeros(n)
-    stor = np.zeros(n)
-    stor_w = np.zeros(n)
-    stor_s = np.full(n, prm[K.EPHI3])
-    conc = np.zeros(n)
+    # dispersion: one batched solve of anions, divalent cations, surfactant and polymer (rows D_*)
+    jd = np.zeros((N_DISP, n + 1))
+    work_c = np.zeros((N_DISP, n))
+    work_d = np.zeros((N_DISP, n))
+    d_stor = np.zeros((N_DISP, n))
+    d_stor[D_SURF] = prm[K.EPHI3]
+    d_conc = np.zeros((N_DISP, n))
+    d_coef = np.zeros((N_DISP, n))
     press = np.zeros(n)
     series = np.zeros((N_SERIES, n_out))
     prof = np.zeros((N_PROFILE, n_prof, n))
@@ -199,10 +219,11 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
                                inj[2, slug], inj[3, slug], flux)
             if prm[K.PC0] > 0.0:
                 T.capillary_fluxes(pr, n, dx, k_over_ul, flux)
+            for r in range(6):
+                for i in range(n):
+                    new[r, i] = st[r, i] - lam * (flux[r, i + 1] - flux[r, i])
             bad = -1
             for i in range(n):
-                for r in range(6):
-                    new[r, i] = st[r, i] - lam * (flux[r, i + 1] - flux[r, i])
                 if (new[L.M1, i] < -NEG_TOL or new[L.M2, i] < -NEG_TOL or new[L.M3, i] - st[L.A3, i] < -NEG_TOL
                         or new[L.M4, i] - st[L.A4, i] < -NEG_TOL or new[L.M5, i] < -NEG_TOL
                         or new[L.M6, i] < -NEG_TOL):
@@ -218,39 +239,39 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
             break
 
         # polymer storage after advection: EPHI4 x carrier saturation, scaled with the water volume
+        e4 = prm[K.EPHI4]
         for i in range(n):
             m1_old = st[L.M1, i]
             ratio = new[L.M1, i] / m1_old if m1_old > 0.0 else 1.0
-            stor[i] = prm[K.EPHI4] * pr[L.SPC, i] * max(ratio, 0.0)
-        for r in range(6):
-            for i in range(n):
-                st[r, i] = new[r, i]
+            d_stor[D_POLY, i] = e4 * pr[L.SPC, i] * max(ratio, 0.0)
+        st[:6] = new
 
         # ---- dispersion (backward Euler, conservative)
         if dispersion:
             lamd = dt / (dx * dx)
-            # anions and divalent cations per water volume (storage: water volume)
+            e3 = prm[K.EPHI3]
             for i in range(n):
-                stor_w[i] = max(st[L.M1, i], 0.0)
-                conc[i] = st[L.M5, i] / st[L.M1, i] if st[L.M1, i] > 0.0 else 0.0
-            T.solve_dispersion(stor_w, conc, pr[L.KW], n, lamd, work_c, work_d, jd)
-            for i in range(n):
-                st[L.M5, i] -= lamd * (jd[i + 1] - jd[i])
-                conc[i] = st[L.M6, i] / st[L.M1, i] if st[L.M1, i] > 0.0 else 0.0
-            T.solve_dispersion(stor_w, conc, pr[L.KW], n, lamd, work_c, work_d, jd)
-            for i in range(n):
-                st[L.M6, i] -= lamd * (jd[i + 1] - jd[i])
+                # anions and divalent cations per water volume (storage: water volume)
+                m1 = st[L.M1, i]
+                d_stor[D_ANION, i] = max(m1, 0.0)
+                d_stor[D_DIVALENT, i] = d_stor[D_ANION, i]
+                d_conc[D_ANION, i] = st[L.M5, i] / m1 if m1 > 0.0 else 0.0
+                d_conc[D_DIVALENT, i] = st[L.M6, i] / m1 if m1 > 0.0 else 0.0
                 # surfactant: overall accessible concentration, storage EPHI3
-                conc[i] = max(st[L.M3, i] - st[L.A3, i], 0.0) / prm[K.EPHI3]
-            T.solve_dispersion(stor_s, conc, pr[L.KS], n, lamd, work_c, work_d, jd)
+                d_conc[D_SURF, i] = max(st[L.M3, i] - st[L.A3, i], 0.0) / e3
+                # polymer in its carrier phase
+                s_p = d_stor[D_POLY, i]
+                d_conc[D_POLY, i] = max(st[L.M4, i] - st[L.A4, i], 0.0) / s_p if s_p > 0.0 else 0.0
+                d_coef[D_ANION, i] = pr[L.KW, i]
+                d_coef[D_DIVALENT, i] = pr[L.KW, i]
+                d_coef[D_SURF, i] = pr[L.KS, i]
+                d_coef[D_POLY, i] = pr[L.KP, i]
+            T.solve_dispersion(d_stor, d_conc, d_coef, n, lamd, work_c, work_d, jd)
             for i in range(n):
-                st[L.M3, i] -= lamd * (jd[i + 1] - jd[i])
-            # polymer in its carrier phase
-            for i in range(n):
-                conc[i] = max(st[L.M4, i] - st[L.A4, i], 0.0) / stor[i] if stor[i] > 0.0 else 0.0
-            T.solve_dispersion(stor, conc, pr[L.KP], n, lamd, work_c, work_d, jd)
-            for i in range(n):
-                st[L.M4, i] -= lamd * (jd[i + 1] - jd[i])
+                st[L.M5, i] -= lamd * (jd[D_ANION, i + 1] - jd[D_ANION, i])
+                st[L.M6, i] -= lamd * (jd[D_DIVALENT, i + 1] - jd[D_DIVALENT, i])
+                st[L.M3, i] -= lamd * (jd[D_SURF, i + 1] - jd[D_SURF, i])
+                st[L.M4, i] -= lamd * (jd[D_POLY, i + 1] - jd[D_POLY, i])
 
         # ---- bookkeeping
         pcx = int(pr[L.PCX, n - 1])
@@ -264,13 +285,10 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
         t = next_stop if land else t + dt
         dt_s = dt * prm[K.T_PV]
         steps += 1
-        for i in range(n):
-            for r in range(6):
-                if not math.isfinite(st[r, i]):
-                    _fill_info(info, t, i, st, pr, dt)
-                    status = L.ERR_NONFINITE
-            if status != L.OK:
-                break
+        bad = _first_nonfinite(st, n)
+        if bad >= 0:
+            _fill_info(info, t, bad, st, pr, dt)
+            status = L.ERR_NONFINITE
 
     for r in range(6):
         for i in range(n):

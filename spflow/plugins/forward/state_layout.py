@@ -12,7 +12,8 @@ the cell):
 - ``FPC``: fractional flow of the polymer-carrying phase at the previous step (lagged shear rate);
 - ``GRADK``: ``k |dp/dx| = u / lambda_T`` (Pa) at the previous step (lagged trapping number).
 
-Properties ``pr[NPR, cells]`` -- recomputed from the state at the start of every step (see ``cell_properties``).
+Properties ``pr[NPR, cells]`` -- recomputed from the state at the start of every step (see ``cell_properties``);
+the rows from ``C1P`` on also carry values between the three property passes (rel-perm inputs and results).
 """
 
 M1, M2, M3, M4, M5, M6, A3, A4, RK, CPMAX, FPC, GRADK = range(12)
@@ -25,7 +26,16 @@ C3P = 9  # surfactant fraction of phase l at C3P + l - 1
 CP, PCX, C5, C6, LAMT, SPEED, KW, KS, KP, PCAP, LWO, DCAP, SPC, PTYPE, FW, WAVE = range(12, 28)
 V1 = 28  # interstitial velocity f_l / S_l of phase l at V1 + l - 1 (PV units)
 IFT = 31  # largest IFT between the ME and an excess phase present (oil-water without ME; 0 single ME), mN/m
-NPR = 32
+C1P = 32  # water fraction of phase l at C1P + l - 1
+CSEP = 35  # polymer effective salinity of the carrier phase (Eq. 2.3), meq/ml
+SIGW = 36  # IFT between the polymer carrier and the oleic phase (capillary pressure), mN/m
+# rel-perm inputs and results of phase l at ROW + l - 1 (passes of ``cell_properties``)
+KR = 37  # end point k_rl^0 (Eq. 2.13), then k_rl (Eq. 2.14)
+DKR = 40  # dk_rl / dS_l
+NEXP = 43  # Corey exponent n_l (Eq. 2.13)
+SBAR = 46  # normalized saturation (Eq. 1.7), 0 for an absent phase
+WINDOW = 49  # 1 - S1r - S2r - S3r
+NPR = 50
 
 # error codes returned by the kernel
 OK = 0

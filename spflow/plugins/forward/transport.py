@@ -159,39 +159,45 @@ def capillary_fluxes(pr, n, dx, prm_k_over_ul, out):
 
 @njit(cache=True, error_model="numpy")
 def solve_dispersion(storage, conc, coef, n, lam, work_c, work_d, out_j):
-    """Backward-Euler dispersion of ``conc`` with ``storage`` per cell and cell coefficients ``coef``.
+    """Backward-Euler dispersion of the species ``k`` (rows of the ``[m, n]`` arrays), all solved in one sweep.
 
-    Face coefficient = mean of the two cells; ``lam = dt / dx^2``. Solves
+    Species ``k`` has concentration ``conc[k]``, storage ``storage[k]`` per cell and cell coefficients ``coef[k]``;
+    the face coefficient is the mean of the two cells and ``lam = dt / dx^2``. Solves
     ``storage_i c_i - lam [K+ (c_{i+1} - c_i) - K- (c_i - c_{i-1})] = storage_i conc_i`` (Thomas algorithm) and
-    returns the face fluxes ``J_j = -K_j (c_j - c_{j-1}) / dx`` times ``dx`` in ``out_j`` (so that the update is
-    ``m_i -= lam (J_{i+1} - J_i)``)."""
+    returns the face fluxes ``J_j = -K_j (c_j - c_{j-1}) / dx`` times ``dx`` in ``out_j[k]`` (so that the update is
+    ``m_i -= lam (J_{i+1} - J_i)``). The species are independent systems; sweeping them together row by row lets
+    their recurrences overlap on the CPU (each system sees exactly the operations of a solve on its own)."""
+    m = storage.shape[0]
     # forward sweep: work_c = modified super-diagonal, work_d = modified rhs
     for i in range(n):
-        kl = 0.5 * (coef[i - 1] + coef[i]) * lam if i > 0 else 0.0
-        kr = 0.5 * (coef[i] + coef[i + 1]) * lam if i < n - 1 else 0.0
-        diag = storage[i] + kl + kr
-        rhs = storage[i] * conc[i]
-        if i > 0:
-            denom = diag + kl * work_c[i - 1]
-            if denom > 0.0:
-                work_c[i] = -kr / denom
-                work_d[i] = (rhs + kl * work_d[i - 1]) / denom
+        for k in range(m):
+            kl = 0.5 * (coef[k, i - 1] + coef[k, i]) * lam if i > 0 else 0.0
+            kr = 0.5 * (coef[k, i] + coef[k, i + 1]) * lam if i < n - 1 else 0.0
+            diag = storage[k, i] + kl + kr
+            rhs = storage[k, i] * conc[k, i]
+            if i > 0:
+                denom = diag + kl * work_c[k, i - 1]
+                if denom > 0.0:
+                    work_c[k, i] = -kr / denom
+                    work_d[k, i] = (rhs + kl * work_d[k, i - 1]) / denom
+                else:
+                    work_c[k, i] = 0.0
+                    work_d[k, i] = conc[k, i]
             else:
-                work_c[i] = 0.0
-                work_d[i] = conc[i]
-        else:
-            if diag > 0.0:
-                work_c[i] = -kr / diag
-                work_d[i] = rhs / diag
-            else:
-                work_c[i] = 0.0
-                work_d[i] = conc[i]
+                if diag > 0.0:
+                    work_c[k, i] = -kr / diag
+                    work_d[k, i] = rhs / diag
+                else:
+                    work_c[k, i] = 0.0
+                    work_d[k, i] = conc[k, i]
     for i in range(n - 2, -1, -1):
-        work_d[i] -= work_c[i] * work_d[i + 1]
-    out_j[0] = 0.0
-    out_j[n] = 0.0
-    for j in range(1, n):
-        out_j[j] = -0.5 * (coef[j - 1] + coef[j]) * (work_d[j] - work_d[j - 1])
+        for k in range(m):
+            work_d[k, i] -= work_c[k, i] * work_d[k, i + 1]
+    for k in range(m):
+        out_j[k, 0] = 0.0
+        out_j[k, n] = 0.0
+        for j in range(1, n):
+            out_j[k, j] = -0.5 * (coef[k, j - 1] + coef[k, j]) * (work_d[k, j] - work_d[k, j - 1])
 
 
 @njit(cache=True, error_model="numpy")

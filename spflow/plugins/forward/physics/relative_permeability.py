@@ -24,5 +24,13 @@ def normalized_saturation(s, s1r, s2r, s3r, s_lr):
 
 @njit(cache=True, error_model="numpy")
 def corey(kr0, sbar, n):
-    """Corey law ``k_r = k_r^0 S_bar^n``, Eqs. 1.6/2.14 (``sbar`` in [0, 1], exponent ``n`` > 0)."""
+    """Corey law ``k_r = k_r^0 S_bar^n``, Eqs. 1.6/2.14 (``sbar`` in [0, 1], exponent ``n`` > 0).
+
+    The end points of the mobile window (``S_bar = 1``: ``1^n = 1``; ``S_bar = 0`` with ``n > 0``: ``0^n = +0``,
+    IEEE/C99 ``pow``) are returned without calling ``pow``, with the same result bits; they are frequent in a flood
+    (phases at or below their residual, or at their maximum saturation)."""
+    if sbar == 1.0:
+        return kr0 * 1.0
+    if sbar == 0.0 and n > 0.0:
+        return kr0 * 0.0
     return kr0 * sbar**n
