@@ -5,6 +5,8 @@
     spflow status PIPELINE [--cache DIR]
     spflow list [stages|effects|params]
     spflow clean [--cache DIR] [--tmp]
+    spflow diagnose --observations FILE [FILE ...] [--heldout FILE ...] --base CONFIG [--catalogue NAMES]
+                    [--out DIR] [--jobs N]
 
 PIPELINE is a path to a Python file, a name in ``./pipelines/`` (``demo`` -> ``pipelines/demo.py``) or a dotted
 module; the module defines ``pipeline`` (a Pipeline or a function returning one) and optionally
@@ -24,6 +26,8 @@ from spflow.core.errors import SpflowError
 from spflow.core.executor import BACKENDS, run, status
 from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry
+from spflow.plugins.gap.command import add_parser as add_diagnose_parser
+from spflow.plugins.gap.command import main as diagnose_command
 
 
 def load_pipeline_module(spec: str) -> dict[str, Any]:
@@ -142,12 +146,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     for p in (p_run, p_status, p_clean):
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
+    add_diagnose_parser(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    handler = {"run": _cmd_run, "status": _cmd_status, "list": _cmd_list, "clean": _cmd_clean}[args.command]
+    handler = {"run": _cmd_run, "status": _cmd_status, "list": _cmd_list, "clean": _cmd_clean,
+               "diagnose": diagnose_command}[args.command]
     try:
         return handler(args)
     except SpflowError as exc:

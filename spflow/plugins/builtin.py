@@ -16,6 +16,7 @@ def spflow_register_stages(register):
     from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
     from spflow.plugins.design.parameter_space import ParameterSpace
     from spflow.plugins.forward.stage import Forward
+    from spflow.plugins.gap.stage import Diagnose
     from spflow.plugins.observations import Observations
     from spflow.plugins.screening.morris_screening import MorrisScreening
     from spflow.plugins.screening.selected_space import SelectedSpace
@@ -28,7 +29,8 @@ def spflow_register_stages(register):
 
     for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
                   SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation,
-                  PCKStage, GPStage, NSGA2Calibration, ParetoDesign, EmceeSampler, MHSampler, PosteriorPredictive):
+                  PCKStage, GPStage, NSGA2Calibration, ParetoDesign, EmceeSampler, MHSampler, PosteriorPredictive,
+                  Diagnose):
         register(stage)
 
 

@@ -1,0 +1,79 @@
+"""Screen, shortlist and refit candidate effects (gap notes §6.1 stage 2, steps 1-2).
+
+* :func:`fingerprint_columns` — whitened finite-strength responses of each candidate at a calibrated point
+  (one forward run per candidate and test strength), the input of
+  :func:`~spflow.plugins.gap.fingerprints.screen`;
+* :func:`shortlist` — the candidates worth a refit: the ``size`` best positive screen scores, plus every candidate
+  whose projected fingerprint is near-collinear (cos >= ``cos_threshold``) with one of them (an a-priori ambiguity
+  partner), minus those whose fingerprint re-calibration absorbs almost entirely (indistinguishable from a
+  calibrated parameter: nothing to attribute);
+* :func:`refit` — "reference model + effect": the calibrated parameters, the strengths already in the reference
+  and the new strength fitted together, from nested and fresh starts at every test strength (the non-convexity
+  guard of gap notes §3.2-A).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from spflow.core.errors import SpflowError
+
+from .catalogue import CandidateEffect
+from .fingerprints import ScreenResult
+from .layout import Layout
+from .least_squares import Fit, fit
+from .prediction import Predictor
+
+__all__ = ["fingerprint_columns", "shortlist", "refit"]
+
+
+def fingerprint_columns(predictor: Predictor, layout: Layout, reference: Fit,
+                        candidates: Sequence[CandidateEffect]) -> list[np.ndarray]:
+    """Per candidate an (n, n_levels) matrix of whitened prediction changes at ``reference``'s point
+    (zero columns where the forward run failed)."""
+    u, strengths = reference.point
+    points = [(u, strengths)] + [(u, {**strengths, c.name: level}) for c in candidates for level in c.levels]
+    preds = predictor.predict(points, layout.experiments, layout.variables)
+    if preds[0] is None:
+        raise SpflowError("the forward run at the calibrated point failed")
+    ref = layout.vector(preds[0])
+    out, k = [], 1
+    for c in candidates:
+        cols = []
+        for _ in c.levels:
+            p = preds[k]
+            cols.append(np.zeros(layout.size) if p is None else layout.whiten(layout.vector(p) - ref))
+            k += 1
+        out.append(np.column_stack(cols))
+    return out
+
+
+def shortlist(result: ScreenResult, size: int, cos_threshold: float = 0.9, absorbed_max: float = 0.95,
+              ) -> list[int]:
+    """Indices of the candidates to refit (module docstring), best screen score first."""
+    z = result.best_z()
+    usable = [i for i in range(len(z)) if result.absorbed(i) < absorbed_max]
+    ranked = sorted((i for i in usable if z[i] > 0.0), key=lambda i: -z[i])
+    chosen = ranked[:size]
+    for i in list(chosen):
+        for j in usable:
+            if j not in chosen and result.cos[i, j] >= cos_threshold:
+                chosen.append(j)
+    return chosen
+
+
+def refit(predictor: Predictor, layout: Layout, reference: Fit, candidate: CandidateEffect,
+          fresh: np.ndarray | None = None, *, max_nfev: int = 30, diff_step: float = 0.01) -> Fit:
+    """The reference model plus ``candidate``, fitted on ``layout``. Starts, with the new strength at each of its
+    test strengths: the reference optimum (nested), and, if given, the unit-box parameters ``fresh`` (the base
+    calibration's own start) with the reference strengths -- re-calibration with the effect on from scratch,
+    because the reference optimum has already bent the parameters to mimic the missing effect."""
+    starts = []
+    for level in candidate.levels:
+        starts.append(np.concatenate((reference.z, [candidate.unit(level)])))
+        if fresh is not None:
+            starts.append(np.concatenate((fresh, reference.z[reference.n_params:], [candidate.unit(level)])))
+    return fit(predictor, layout, starts, reference.candidates + (candidate,), max_nfev=max_nfev,
+               diff_step=diff_step)

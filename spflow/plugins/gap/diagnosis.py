@@ -1,0 +1,283 @@
+"""The gap diagnosis: calibrate the base model, localise its misfit, attribute it, quantify the gain (gap notes §6.1).
+
+:func:`diagnose` runs the whole procedure on measured corefloods and returns a :class:`GapDiagnosis`;
+:mod:`~spflow.plugins.gap.report` turns that into the gap-report Dataset and ``summary.json``, and
+:mod:`~spflow.plugins.gap.figures` draws it.
+
+1. **Calibrate** the base model on the calibration experiments (:mod:`~spflow.plugins.gap.base_calibration`).
+2. **Where** — whitened residuals per QoI x slug cell, Ljung-Box whiteness, signature predictive checks, ranked gap
+   cells (:mod:`~spflow.plugins.gap.localisation`, :mod:`~spflow.plugins.gap.signatures`); the calibration gap is
+   significant when ``P(chi^2_{n-p} >= chi^2) < alpha``.
+3. **Which** — projected finite-strength fingerprints of every candidate and their angle matrix
+   (:mod:`~spflow.plugins.gap.fingerprints`), a shortlist, refits of "reference + effect"
+   (:mod:`~spflow.plugins.gap.candidates`) scored out of sample (held-out experiments, else leave-one-slug-out;
+   :mod:`~spflow.plugins.gap.predictive_scores`), the decision rule and greedy addition of further effects
+   (:mod:`~spflow.plugins.gap.verdict`).
+4. **How far** — gap closed, RMSE ratios, interval coverage and parameter shifts of the final model against the
+   base (:mod:`~spflow.plugins.gap.quantification`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import chi2
+
+from spflow.core.errors import ParameterError
+
+from .base_calibration import calibrate_base
+from .base_model import BaseModel
+from .candidates import fingerprint_columns, refit, shortlist
+from .catalogue import CandidateEffect, candidates_for
+from .fingerprints import NuisanceProjector, ScreenResult, screen
+from .layout import Layout, make_layout
+from .least_squares import Fit
+from .localisation import Cell, cells, gap_cells, ljung_box
+from .observed import Experiment, load_experiments
+from .prediction import Predictor
+from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
+from .quantification import gap_closed, parameter_covariance, predictive_std, raw_jacobian
+from .signatures import predictive_pvalues, signatures
+from .verdict import CandidateScore, Rule, ambiguity_set, verdict
+
+__all__ = ["Options", "GapDiagnosis", "ModelView", "Step", "diagnose"]
+
+
+@dataclass(frozen=True)
+class Options:
+    """Settings of a diagnosis (the ``diagnose`` stage's parameters)."""
+
+    variables: tuple[str, ...] = ("dp", "oil_cut")
+    pv_step: float = 0.1
+    alpha: float = 0.01
+    shortlist: int = 3
+    max_effects: int = 2
+    max_nfev: int = 30
+    starts: int = 1
+    nuisance_scale: float = 0.5
+    cos_threshold: float = 0.9
+    rule: Rule = field(default_factory=Rule)
+    replicates: int = 200
+    interval: float = 0.9
+    seed: int = 0
+    diff_step: float = 0.01
+    loso_nfev: int = 8
+
+
+@dataclass
+class Step:
+    """One round of screening and refitting on top of a model (``reference``), scored against the last accepted
+    model (``scored_against``)."""
+
+    reference: str
+    scored_against: str
+    screen: ScreenResult
+    shortlisted: list[str]
+    fits: dict[str, Fit]
+    scores: dict[str, CandidateScore]
+    out_of_sample: dict[str, Predictive]
+
+
+@dataclass
+class ModelView:
+    """A calibrated model seen on every measured point (``layout_all``): predictions, residuals, intervals."""
+
+    label: str
+    fit: Fit
+    prediction: np.ndarray
+    residual: np.ndarray
+    whitened: np.ndarray
+    std: np.ndarray
+    cells: list[Cell]
+    ljung_box: dict[tuple[str, str], tuple[float, float, int]]
+    signatures: dict[str, dict[str, tuple[float, float]]]
+    predicted_signatures: dict[str, dict[str, float]]
+
+
+@dataclass
+class GapDiagnosis:
+    """Everything a gap report shows (see :mod:`~spflow.plugins.gap.report`)."""
+
+    options: Options
+    base: BaseModel
+    calibration: list[Experiment]
+    heldout: list[Experiment]
+    candidates: list[CandidateEffect]
+    layout_fit: Layout
+    layout_score: Layout
+    layout_all: Layout
+    score_kind: str
+    base_fit: Fit
+    chi2_pvalue: float
+    gap_significant: bool
+    steps: list[Step]
+    accepted: list[list[str]]
+    verdict: str
+    ambiguity: list[str]
+    final_fit: Fit
+    final_label: str
+    out_of_sample_base: Predictive
+    out_of_sample_final: Predictive
+    base_view: ModelView
+    final_view: ModelView
+    gap_cells: list[Cell]
+    wall_time_s: float
+    forward_runs: int
+
+    @property
+    def dof(self) -> int:
+        return self.layout_fit.size - len(self.base.parameters)
+
+
+def _series(layout: Layout, values: np.ndarray, exp: Experiment) -> dict[str, np.ndarray]:
+    """Per-variable grid series of ``exp`` from a layout vector (NaN off the measured points)."""
+    out = {}
+    for b, s in zip(layout.blocks, layout.slices()):
+        if b.experiment == exp.name:
+            series = np.full(exp.pv.size, np.nan)
+            series[b.index] = values[s]
+            out[b.variable] = series
+    return out
+
+
+def _view(label, fitted, predictor, layout, experiments, options, rng) -> ModelView:
+    y, jac = raw_jacobian(predictor, layout, fitted, options.diff_step)
+    cov = parameter_covariance(fitted.jacobian, options.nuisance_scale)
+    std = predictive_std(layout, jac, cov)
+    obs = layout.observed()
+    e = y - obs
+    w = layout.whiten(e)
+    slug_names = {x.name: [s.name for s in x.schedule.slugs] for x in experiments}
+    lb = {(b.variable, b.experiment): ljung_box(w[s]) for b, s in zip(layout.blocks, layout.slices())}
+    # replicated data for the signature checks: linearised parameter draws plus measurement errors
+    dz = rng.multivariate_normal(np.zeros(cov.shape[0]), cov, size=options.replicates, method="eigh")
+    reps = y + dz @ jac.T
+    for b, s in zip(layout.blocks, layout.slices()):
+        reps[:, s] += b.noise.draw(rng, options.replicates)
+    sigs, pred_sigs = {}, {}
+    for exp in experiments:
+        sigs[exp.name] = predictive_pvalues(exp, _series(layout, obs, exp),
+                                            [_series(layout, r, exp) for r in reps])
+        pred_sigs[exp.name] = signatures(exp, _series(layout, y, exp))
+    return ModelView(label, fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs)
+
+
+def _label(fitted: Fit) -> str:
+    return "+".join(["base"] + [c.name for c in fitted.candidates])
+
+
+def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogue: Sequence[str] | None = None,
+             options: Options | None = None, *, parallel=None, parameter_sets: np.ndarray | None = None,
+             polish: bool = True, log: Callable[[str], None] | None = None) -> GapDiagnosis:
+    """Diagnose the sim-to-real gap of ``base`` on corefloods ``calibration`` (names, paths or Datasets), scoring
+    candidates on ``heldout`` (or leave-one-slug-out when empty). See the module docstring."""
+    options = options or Options()
+    say = log or (lambda msg: None)
+    start = time.perf_counter()
+    if not calibration:
+        raise ParameterError("a diagnosis needs at least one calibration coreflood")
+    cal = load_experiments(calibration, options.pv_step, base.schedules)
+    held = load_experiments(heldout, options.pv_step, base.schedules)
+    clash = sorted({e.name for e in cal} & {e.name for e in held})
+    if clash:
+        raise ParameterError(f"experiments {clash} are both calibration and held-out data")
+    candidates = candidates_for(catalogue, base.effects)
+    predictor = Predictor(base, cal + held, parallel)
+    layout_fit = make_layout(cal, options.variables)
+    missing = sorted(set(options.variables) - {b.variable for b in layout_fit.blocks})
+    if missing:
+        raise ParameterError(f"variables {missing} are not measured in the calibration data "
+                             f"({', '.join(e.name for e in cal)})")
+    if layout_fit.size <= len(base.parameters):
+        raise ParameterError(f"{layout_fit.size} calibration points cannot calibrate {len(base.parameters)} "
+                             "parameters")
+    layout_held = make_layout(held, options.variables)
+    layout_all = make_layout(cal + held)
+    kind = "heldout" if layout_held.size else "leave_one_slug_out"
+    layout_score = layout_held if layout_held.size else layout_fit
+
+    def out_of_sample(f: Fit) -> Predictive:
+        if layout_held.size:
+            return predictive(predictor, layout_held, f, options.nuisance_scale, options.diff_step)
+        return leave_one_slug_out(predictor, layout_fit, f, tau=options.nuisance_scale, max_nfev=options.loso_nfev,
+                                  diff_step=options.diff_step)
+
+    say(f"calibrating the base model on {', '.join(e.name for e in cal)} ({layout_fit.size} points)")
+    base_fit = calibrate_base(predictor, layout_fit, starts=options.starts, seed=options.seed,
+                              max_nfev=options.max_nfev, diff_step=options.diff_step,
+                              parameter_sets=parameter_sets, polish=polish)
+    dof = layout_fit.size - len(base.parameters)
+    pvalue = float(chi2.sf(base_fit.chi2, dof))
+    say(f"base chi2 = {base_fit.chi2:.1f} on {dof} dof (p = {pvalue:.3g}); {predictor.runs} forward runs")
+    w_base = out_of_sample(base_fit)
+
+    # ``reference``: the last accepted model (what a candidate must beat out of sample); ``fitting``: the model the
+    # next candidates are added to -- the reference, or a provisional first effect when no single effect passes
+    reference, w_ref, fitting, provisional = base_fit, w_base, base_fit, None
+    remaining = list(candidates)
+    steps: list[Step] = []
+    accepted: list[list[str]] = []
+    while remaining and len(fitting.candidates) < options.max_effects:
+        cols = fingerprint_columns(predictor, layout_fit, fitting, remaining)
+        result = screen([c.name for c in remaining], [c.levels for c in remaining], cols, -fitting.residual,
+                        NuisanceProjector(fitting.jacobian, options.nuisance_scale))
+        chosen = shortlist(result, options.shortlist, options.cos_threshold)
+        step = Step(_label(fitting), _label(reference), result, [remaining[i].name for i in chosen], {}, {}, {})
+        for i in chosen:
+            c = remaining[i]
+            say(f"refitting {_label(fitting)}+{c.name} (screen z = {result.best_z()[i]:.2f})")
+            f = refit(predictor, layout_fit, fitting, c, base_fit.start[: base_fit.n_params],
+                      max_nfev=options.max_nfev, diff_step=options.diff_step)
+            w = out_of_sample(f)
+            delta, se, se_pointwise = compare(w, w_ref)
+            strengths = f.strengths
+            physical = all(x.is_physical(strengths[x.name]) for x in f.candidates if x.name not in
+                           {n for names in accepted for n in names})
+            sd = np.sqrt(parameter_covariance(f.jacobian, options.nuisance_scale)[-1, -1])
+            strength_z = (f.z[-1] - c.unit(c.base)) / sd
+            step.fits[c.name], step.out_of_sample[c.name] = f, w
+            step.scores[c.name] = CandidateScore(c.name, delta, se, se_pointwise, strengths[c.name], strength_z,
+                                                 physical, gap_closed(base_fit.chi2, f.chi2, dof),
+                                                 fitting.chi2 - f.chi2, w.gradient)
+        steps.append(step)
+        # nothing is accepted without a significant calibration gap (verdict.py: gains only out of sample)
+        chosen_set = ambiguity_set(list(step.scores.values()), options.rule) if pvalue < options.alpha else []
+        if chosen_set:
+            accepted += ([[provisional]] if provisional else []) + [[s.name for s in chosen_set]]
+            best = chosen_set[0].name
+            reference = fitting = step.fits[best]
+            w_ref, provisional = step.out_of_sample[best], None
+            remaining = [c for c in remaining if c.name != best]
+            if chi2.sf(reference.chi2, dof - len(reference.candidates)) >= options.alpha:
+                break  # no significant calibration gap left
+            continue
+        closers = [x for x in step.scores.values() if x.physical and x.gap_closed > 0.0]
+        if provisional is not None or fitting is not base_fit or pvalue >= options.alpha or not closers:
+            break  # (refits without a calibration gap are reported, not used)
+        # no single effect passes out of sample although the calibration gap is significant: two mechanisms may
+        # compensate each other, so add a second effect to the one closing most of the calibration gap and score
+        # the pair against the reference (the provisional effect is accepted only together with its partner)
+        provisional = max(closers, key=lambda x: x.gap_closed).name
+        fitting = step.fits[provisional]
+        remaining = [c for c in remaining if c.name != provisional]
+    accepted = [[n for n in names if n == names[0] or all(n not in later for later in accepted[k + 1:])]
+                for k, names in enumerate(accepted)]  # an effect accepted later is no longer ambiguous
+    final_closed = gap_closed(base_fit.chi2, reference.chi2, dof)
+    unconfirmed = [] if accepted else [s.name for s in sorted(steps[0].scores.values(), key=lambda s: -s.delta_elpd)
+                                       if s.physical and s.gap_closed >= options.rule.closed_fraction]
+    decided, ambiguity = verdict(accepted, pvalue < options.alpha, final_closed, unconfirmed, options.rule)
+    say(f"verdict: {decided} {ambiguity}")
+
+    rng = np.random.default_rng(options.seed)
+    everything = cal + held
+    base_view = _view("base", base_fit, predictor, layout_all, everything, options, rng)
+    final_view = base_view if reference is base_fit else _view(_label(reference), reference, predictor, layout_all,
+                                                                everything, options, rng)
+    return GapDiagnosis(options, base, cal, held, candidates, layout_fit, layout_score, layout_all, kind, base_fit,
+                        pvalue, pvalue < options.alpha, steps, accepted, decided, ambiguity, reference,
+                        _label(reference), w_base, w_ref, base_view, final_view,
+                        gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
+                        time.perf_counter() - start, predictor.runs)

@@ -1,0 +1,98 @@
+"""Which observations form the vectors a diagnosis compares, in which order, with which error model.
+
+A :class:`Block` is one (variable, experiment) series at the grid points where it was measured, labelled with the
+slug being injected at each point (``<qoi>:<slug>:<pv>`` naming of gap notes §6.1). A :class:`Layout` concatenates
+blocks into one vector and whitens residual vectors block by block (:mod:`spflow.plugins.gap.error_model`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .error_model import BlockErrorModel, block_error_model
+from .observed import Experiment
+
+__all__ = ["Block", "Layout", "make_layout"]
+
+
+@dataclass(frozen=True)
+class Block:
+    """One measured series: grid positions ``index`` of its finite observations, their PV, values and slugs."""
+
+    variable: str
+    experiment: str
+    index: np.ndarray
+    pv: np.ndarray
+    observed: np.ndarray
+    slug: np.ndarray
+    noise: BlockErrorModel
+
+
+@dataclass(frozen=True)
+class Layout:
+    """An ordered set of blocks; vectors are the blocks' points concatenated in this order."""
+
+    blocks: tuple[Block, ...]
+
+    @property
+    def experiments(self) -> list[str]:
+        return sorted({b.experiment for b in self.blocks})
+
+    @property
+    def variables(self) -> list[str]:
+        return sorted({b.variable for b in self.blocks})
+
+    @property
+    def size(self) -> int:
+        return int(sum(b.index.size for b in self.blocks))
+
+    def slices(self) -> list[slice]:
+        edges = np.concatenate(([0], np.cumsum([b.index.size for b in self.blocks])))
+        return [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+
+    def observed(self) -> np.ndarray:
+        return np.concatenate([b.observed for b in self.blocks])
+
+    def vector(self, predictions: Mapping[str, Mapping[str, np.ndarray]]) -> np.ndarray:
+        """Predictions (experiment -> variable -> series on the grid) at this layout's points."""
+        return np.concatenate([np.asarray(predictions[b.experiment][b.variable])[b.index] for b in self.blocks])
+
+    def whiten(self, e: np.ndarray) -> np.ndarray:
+        """Whitened residuals of ``e`` (points on axis 0), block by block."""
+        return np.concatenate([b.noise.whiten(e[s]) for b, s in zip(self.blocks, self.slices())])
+
+    def marginal_std(self) -> np.ndarray:
+        return np.concatenate([b.noise.marginal_std() for b in self.blocks])
+
+    def subset(self, keep: np.ndarray) -> Layout:
+        """The layout of the points where ``keep`` (over the concatenated vector) is true; each block's AR(1)
+        recursion then runs over its kept points as if they were consecutive."""
+        blocks = []
+        for b, s in zip(self.blocks, self.slices()):
+            k = np.asarray(keep[s], bool)
+            if k.any():
+                blocks.append(Block(b.variable, b.experiment, b.index[k], b.pv[k], b.observed[k], b.slug[k],
+                                    BlockErrorModel(b.noise.scale[k], b.noise.phi)))
+        return Layout(tuple(blocks))
+
+    def select(self, experiments: Sequence[str] | None = None, variables: Sequence[str] | None = None) -> Layout:
+        """The sub-layout of the given experiments and/or variables (order kept)."""
+        return Layout(tuple(b for b in self.blocks if (experiments is None or b.experiment in experiments)
+                            and (variables is None or b.variable in variables)))
+
+
+def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | None = None) -> Layout:
+    """Blocks of every measured variable (or only ``variables``) of every experiment, experiments first."""
+    blocks = []
+    for exp in experiments:
+        for variable, series in exp.observed.items():
+            if variables is not None and variable not in variables:
+                continue
+            index = np.flatnonzero(np.isfinite(series))
+            pv = exp.pv[index]
+            blocks.append(Block(variable, exp.name, index, pv, series[index], exp.slug_index(pv),
+                                block_error_model(variable, exp, series[index])))
+    return Layout(tuple(blocks))

@@ -1,0 +1,108 @@
+"""Measured corefloods as a gap diagnosis sees them: values on the simulator grid plus the lab's measurement model.
+
+Each coreflood (a bundled name, a netCDF or CSV file, or an in-memory Dataset in the format of
+:mod:`spflow.io.format`) becomes an :class:`Experiment`: its schedule, its core data (``core_length_m`` ... attrs ->
+``LENGTH`` ...), its measurement model (the ``noise_*`` attrs as a :class:`~spflow.synthetic.NoiseModel`; the
+documented lab defaults when the file has none, which the report says), and every measured variable on the
+simulator's output grid (:func:`spflow.plugins.observations.on_simulator_grid`: point values interpolated, tube
+averages volume-averaged, NaN where not measured).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields
+
+import numpy as np
+import xarray as xr
+
+from spflow.core.errors import ParameterError
+from spflow.io import load_coreflood
+from spflow.plugins.forward.schedule import Schedule, as_schedule
+from spflow.plugins.forward.simulate import output_grid
+from spflow.plugins.observations import on_simulator_grid
+from spflow.synthetic import NoiseModel
+
+__all__ = ["Experiment", "load_experiments", "MEASURABLE"]
+
+#: variables a diagnosis can use (the simulator's responses that a lab measures)
+MEASURABLE = ("dp", "oil_cut", "recovery", "c_polymer_out", "c_surfactant_out", "salinity_out")
+#: coreflood attr -> forward-model parameter
+_CORE_ATTRS = (("core_length_m", "LENGTH"), ("core_diameter_m", "DIAMETER"), ("porosity", "PORO"),
+               ("swi", "SWI"), ("qinj_ml_min", "QINJ"))
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One coreflood on the simulator grid ``pv`` (step ``pv_step``) with its measurement model."""
+
+    name: str
+    schedule: Schedule
+    core: dict[str, float]
+    measurement: NoiseModel
+    noise_from_data: bool
+    pv: np.ndarray
+    pv_step: float
+    observed: dict[str, np.ndarray]
+    pore_volume_ml: float | None
+    ooip_ml: float | None
+
+    def slug_ends(self) -> np.ndarray:
+        """Cumulative injected PV at the end of each slug."""
+        return np.cumsum([s.pv for s in self.schedule.slugs])
+
+    def slug_index(self, pv: np.ndarray) -> np.ndarray:
+        """Index of the slug being injected at each PV (a point on a slug end belongs to the slug it ends)."""
+        ends = self.slug_ends()
+        return np.minimum(np.searchsorted(ends - 1e-9, pv), len(ends) - 1)
+
+
+def _noise(ds: xr.Dataset) -> tuple[NoiseModel, bool]:
+    given = {f.name: float(ds.attrs[f"noise_{f.name}"]) for f in fields(NoiseModel) if f"noise_{f.name}" in ds.attrs}
+    try:
+        return NoiseModel(**given), len(given) == len(fields(NoiseModel))
+    except ValueError as exc:
+        raise ParameterError(f"coreflood {ds.attrs.get('experiment')!r}: measurement model attrs: {exc}") from None
+
+
+def _experiment(ds: xr.Dataset, pv_step: float, schedules: Mapping[str, object]) -> Experiment:
+    name = str(ds.attrs.get("experiment", "experiment"))
+    if name in schedules:
+        schedule = as_schedule(schedules[name])
+    elif "schedule" in ds.attrs:
+        schedule = as_schedule(json.loads(ds.attrs["schedule"]))
+    else:
+        raise ParameterError(f"coreflood {name!r} has no 'schedule' attr; give its schedule in the base model's "
+                             f"[schedules] table ({name} = \"BCF1\" or a slug list)")
+    if pv_step > schedule.total_pv:
+        raise ParameterError(f"pv_step = {pv_step:g} PV exceeds the {schedule.total_pv:g} PV of {name!r}")
+    grid = output_grid(schedule.total_pv, pv_step)
+    present = [v for v in MEASURABLE if v in ds]
+    if not present:
+        raise ParameterError(f"coreflood {name!r} has none of the variables {list(MEASURABLE)}")
+    observed = {v: s for v, s in on_simulator_grid(ds, present, grid, pv_step).items() if np.isfinite(s).any()}
+    noise, from_data = _noise(ds)
+    core = {param: float(ds.attrs[attr]) for attr, param in _CORE_ATTRS if attr in ds.attrs}
+    return Experiment(name, schedule, core, noise, from_data, grid, pv_step, observed,
+                      float(ds.attrs["pore_volume_ml"]) if "pore_volume_ml" in ds.attrs else None,
+                      float(ds.attrs["ooip_ml"]) if "ooip_ml" in ds.attrs else None)
+
+
+def load_experiments(sources: Sequence, pv_step: float, schedules: Mapping[str, object] | None = None,
+                     ) -> list[Experiment]:
+    """Experiments from bundled names, file paths or in-memory coreflood Datasets; names must be distinct."""
+    out = []
+    for source in sources:
+        if isinstance(source, xr.Dataset):
+            ds = source
+        else:
+            try:
+                ds = load_coreflood(source)
+            except (ValueError, OSError) as exc:
+                raise ParameterError(f"coreflood {source!r}: {exc}") from None
+        out.append(_experiment(ds, pv_step, schedules or {}))
+    names = [e.name for e in out]
+    if len(set(names)) != len(names):
+        raise ParameterError(f"experiments must have distinct names (attr 'experiment'), got {names}")
+    return out

@@ -1,0 +1,310 @@
+"""The gap report: a netCDF-able Dataset of a :class:`~spflow.plugins.gap.diagnosis.GapDiagnosis`, and its summary.
+
+Dataset layout (every variable has ``units``; mixed-unit tables name their units in a coordinate):
+
+* series on (``model`` = base | final, ``experiment``, ``pv``): ``prediction_<qoi>``, ``std_<qoi>`` (predictive
+  standard deviation), ``whitened_<qoi>``; ``observed_<qoi>`` on (``experiment``, ``pv``); ``role`` of each
+  experiment (calibration | heldout);
+* ``cell`` table (QoI x experiment x slug): ``cell_n``, ``cell_chi2`` (normalised, per model), ``cell_pvalue``,
+  ``cell_bias_z``, ``cell_rms`` and ``gap_rank`` (1 = largest significant gap, 0 = not a gap cell);
+* ``block`` table (QoI x experiment): Ljung-Box ``whiteness_q`` / ``whiteness_pvalue``, ``rmse``, ``coverage``;
+* ``signature`` table: ``signature_observed``, ``signature_predicted`` and ``signature_pvalue`` per model;
+* ``candidate`` tables per greedy ``step``: ``screen_z``, ``snr``, ``absorbed``, ``fitted_strength``,
+  ``delta_elpd`` (+ SEs), ``gap_closed``, ``passes``; ``fingerprint_cos`` of the first step;
+* ``param`` table: ``theta`` per model and ``shift_fraction``;
+* scalars and attrs: chi^2, p-value, gap-closed fractions, coverage, ELPD, the verdict and the ambiguity set.
+
+:func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import xarray as xr
+
+from spflow.plugins.forward.parameters import PARAMETERS
+from spflow.plugins.forward.simulate import common_grid
+
+from .diagnosis import GapDiagnosis, ModelView
+from .localisation import Cell
+from .quantification import block_rmse, coverage, gap_closed
+from .signatures import SIGNATURE_UNITS
+from .verdict import passes
+
+__all__ = ["report_dataset", "summary"]
+
+_UNITS = {"dp": "Pa", "oil_cut": "1", "recovery": "1", "c_polymer_out": "ppm", "c_surfactant_out": "ppm",
+          "salinity_out": "ppm"}
+_SPEC_UNITS = {p.name: p.unit for p in PARAMETERS}
+
+
+def _series_vars(g: GapDiagnosis, views: list[ModelView], grid: np.ndarray, positions: dict[str, np.ndarray]):
+    names = [e.name for e in g.calibration + g.heldout]
+    out = {}
+    for variable in g.layout_all.variables:
+        obs = np.full((len(names), grid.size), np.nan)
+        pred, std, white = (np.full((len(views), len(names), grid.size), np.nan) for _ in range(3))
+        for b, s in zip(g.layout_all.blocks, g.layout_all.slices()):
+            if b.variable != variable:
+                continue
+            i = names.index(b.experiment)
+            cols = positions[b.experiment][b.index]
+            obs[i, cols] = b.observed
+            for m, v in enumerate(views):
+                pred[m, i, cols], std[m, i, cols], white[m, i, cols] = v.prediction[s], v.std[s], v.whitened[s]
+        u = _UNITS[variable]
+        out[f"observed_{variable}"] = (("experiment", "pv"), obs, {"units": u})
+        out[f"prediction_{variable}"] = (("model", "experiment", "pv"), pred, {"units": u})
+        out[f"std_{variable}"] = (("model", "experiment", "pv"), std, {"units": u})
+        out[f"whitened_{variable}"] = (("model", "experiment", "pv"), white, {"units": "1"})
+    return out
+
+
+def _score_vars(g: GapDiagnosis, grid: np.ndarray, positions: dict[str, np.ndarray]):
+    """Pointwise out-of-sample log-density differences final - base on the scored points, per QoI."""
+    names = [e.name for e in g.calibration + g.heldout]
+    diff = g.out_of_sample_final.lpd - g.out_of_sample_base.lpd
+    out = {}
+    for b, s in zip(g.layout_score.blocks, g.layout_score.slices()):
+        key = f"elpd_difference_{b.variable}"
+        if key not in out:
+            out[key] = (("experiment", "pv"), np.full((len(names), grid.size), np.nan),
+                        {"units": "nat", "long_name": f"pointwise out-of-sample lpd, final - base ({g.score_kind})"})
+        out[key][1][names.index(b.experiment), positions[b.experiment][b.index]] = diff[s]
+    return out
+
+
+def _slug_vars(experiments):
+    n = max(len(e.schedule.slugs) for e in experiments)
+    ends = np.full((len(experiments), n), np.nan)
+    names = np.full((len(experiments), n), "", dtype=object)
+    for i, e in enumerate(experiments):
+        ends[i, : len(e.schedule.slugs)] = e.slug_ends()
+        names[i, : len(e.schedule.slugs)] = [s.name for s in e.schedule.slugs]
+    return {"slug_end_pv": (("experiment", "slug"), ends, {"units": "PV"}),
+            "slug_name": (("experiment", "slug"), names.astype(str))}
+
+
+def _cell_vars(g: GapDiagnosis, views: list[ModelView]):
+    base: list[Cell] = views[0].cells
+    rank = {(c.variable, c.experiment, c.slug): k + 1 for k, c in enumerate(g.gap_cells)}
+    coords = {
+        "cell_variable": ("cell", [c.variable for c in base]),
+        "cell_experiment": ("cell", [c.experiment for c in base]),
+        "cell_slug": ("cell", [c.slug_name for c in base]),
+        "cell_pv_start": ("cell", [c.pv_start for c in base], {"units": "PV"}),
+        "cell_pv_end": ("cell", [c.pv_end for c in base], {"units": "PV"}),
+    }
+    data = {
+        "cell_n": ("cell", [c.n for c in base], {"units": "1"}),
+        "cell_chi2": (("model", "cell"), [[c.normalised_chi2 for c in v.cells] for v in views],
+                      {"units": "1", "long_name": "mean squared whitened residual (expected 1)"}),
+        "cell_pvalue": (("model", "cell"), [[c.pvalue for c in v.cells] for v in views], {"units": "1"}),
+        "cell_bias_z": (("model", "cell"), [[c.bias_z for c in v.cells] for v in views], {"units": "1"}),
+        "cell_rms": (("model", "cell"), [[c.rms for c in v.cells] for v in views],
+                     {"units": "of cell_variable (Pa for dp, 1 for fractions, ppm for concentrations)"}),
+        "gap_rank": ("cell", [rank.get((c.variable, c.experiment, c.slug), 0) for c in base], {"units": "1"}),
+    }
+    return coords, data
+
+
+def _block_vars(g: GapDiagnosis, views: list[ModelView]):
+    blocks = g.layout_all.blocks
+    slices = g.layout_all.slices()
+    coords = {"block_variable": ("block", [b.variable for b in blocks]),
+              "block_experiment": ("block", [b.experiment for b in blocks])}
+    q = [[v.ljung_box[(b.variable, b.experiment)][0] for b in blocks] for v in views]
+    p = [[v.ljung_box[(b.variable, b.experiment)][1] for b in blocks] for v in views]
+    rmse = [list(block_rmse(g.layout_all, v.residual).values()) for v in views]
+    cov = [[coverage(v.residual[s], v.std[s], g.options.interval) for s in slices] for v in views]
+    data = {
+        "whiteness_q": (("model", "block"), q, {"units": "1", "long_name": "Ljung-Box Q of whitened residuals"}),
+        "whiteness_pvalue": (("model", "block"), p, {"units": "1"}),
+        "rmse": (("model", "block"), rmse, {"units": "of block_variable"}),
+        "coverage": (("model", "block"), cov, {"units": "1", "long_name": f"{g.options.interval:g} interval coverage"}),
+    }
+    return coords, data
+
+
+def _signature_vars(g: GapDiagnosis, views: list[ModelView]):
+    keys = [(e, k) for e, table in views[0].signatures.items() for k in table]
+    coords = {"signature_experiment": ("signature", [e for e, _ in keys]),
+              "signature_name": ("signature", [k for _, k in keys]),
+              "signature_units": ("signature", [SIGNATURE_UNITS[k.split(":")[0]] for _, k in keys])}
+    data = {
+        "signature_observed": ("signature", [views[0].signatures[e][k][0] for e, k in keys],
+                               {"units": "see signature_units"}),
+        "signature_predicted": (("model", "signature"), [[v.predicted_signatures[e].get(k, np.nan) for e, k in keys]
+                                                         for v in views], {"units": "see signature_units"}),
+        "signature_pvalue": (("model", "signature"), [[v.signatures[e][k][1] for e, k in keys] for v in views],
+                             {"units": "1", "long_name": "two-sided posterior-predictive p-value"}),
+    }
+    return coords, data
+
+
+def _candidate_vars(g: GapDiagnosis):
+    names = [c.name for c in g.candidates]
+    shape = (len(g.steps), len(names))
+    tables = {k: np.full(shape, np.nan) for k in ("screen_z", "snr", "absorbed", "fitted_strength", "strength_z",
+                                                  "delta_elpd",
+                                                  "delta_elpd_se", "delta_elpd_se_pointwise", "gap_closed",
+                                                  "chi2_calibration")}
+    flags = {k: np.zeros(shape, dtype=np.int8) for k in ("shortlisted", "passes", "physical")}
+    for s, step in enumerate(g.steps):
+        for i, name in enumerate(step.screen.names):
+            j = names.index(name)
+            tables["screen_z"][s, j] = step.screen.best_z()[i]
+            tables["snr"][s, j] = step.screen.snr[i][-1]
+            tables["absorbed"][s, j] = step.screen.absorbed(i)
+        for name, score in step.scores.items():
+            j = names.index(name)
+            flags["shortlisted"][s, j] = 1
+            tables["fitted_strength"][s, j] = score.strength
+            tables["strength_z"][s, j] = score.strength_z
+            tables["delta_elpd"][s, j] = score.delta_elpd
+            tables["delta_elpd_se"][s, j] = score.se
+            tables["delta_elpd_se_pointwise"][s, j] = score.se_pointwise
+            tables["gap_closed"][s, j] = score.gap_closed
+            tables["chi2_calibration"][s, j] = step.fits[name].chi2
+            flags["passes"][s, j] = int(passes(score, g.options.rule))
+            flags["physical"][s, j] = int(score.physical)
+    first = g.steps[0].screen
+    order = [first.names.index(n) for n in names]
+    cos = first.cos[np.ix_(order, order)]
+    units = {"fitted_strength": "effect strength (see spflow list effects)", "delta_elpd": "nat",
+             "delta_elpd_se": "nat", "delta_elpd_se_pointwise": "nat"}
+    data = {k: (("step", "candidate"), v, {"units": units.get(k, "1")}) for k, v in tables.items()}
+    data |= {k: (("step", "candidate"), v, {"units": "1"}) for k, v in flags.items()}
+    data["step_reference"] = ("step", [s.reference for s in g.steps])
+    data["step_scored_against"] = ("step", [s.scored_against for s in g.steps])
+    data["fingerprint_cos"] = (("candidate", "candidate_b"), cos, {"units": "1"})
+    data["base_strength"] = ("candidate", [c.base for c in g.candidates], {"units": "effect strength"})
+    data["physical_lower"] = ("candidate", [c.physical[0] for c in g.candidates], {"units": "effect strength"})
+    data["physical_upper"] = ("candidate", [c.physical[1] for c in g.candidates], {"units": "effect strength"})
+    return {"candidate": names, "candidate_b": names}, data
+
+
+def _scalars(g: GapDiagnosis):
+    cal = [e.name for e in g.calibration]
+    held = [e.name for e in g.heldout]
+    out = {"chi2_base": g.base_fit.chi2, "chi2_final": g.final_fit.chi2, "dof": float(g.dof),
+           "chi2_pvalue": g.chi2_pvalue,
+           "gap_closed_calibration": gap_closed(g.base_fit.chi2, g.final_fit.chi2, g.dof),
+           "elpd_base": g.out_of_sample_base.total, "elpd_final": g.out_of_sample_final.total}
+    n_score = float(np.sum(np.isfinite(g.out_of_sample_base.whitened)))
+    chi2_h0 = float(np.nansum(g.out_of_sample_base.whitened ** 2))
+    chi2_h1 = float(np.nansum(g.out_of_sample_final.whitened ** 2))
+    out.update(chi2_heldout_base=chi2_h0, chi2_heldout_final=chi2_h1, n_heldout=n_score,
+               gap_closed_heldout=gap_closed(chi2_h0, chi2_h1, n_score))
+    for label, names in (("calibration", cal), ("heldout", held)):
+        rows = np.concatenate([np.full(b.index.size, b.experiment in names) for b in g.layout_all.blocks])
+        for model, v in (("base", g.base_view), ("final", g.final_view)):
+            out[f"coverage_{label}_{model}"] = coverage(v.residual[rows], v.std[rows], g.options.interval) \
+                if rows.any() else float("nan")
+    units = {k: "1" for k in out}
+    units.update(elpd_base="nat", elpd_final="nat")
+    return {k: ((), float(v), {"units": units[k]}) for k, v in out.items()}
+
+
+def report_dataset(g: GapDiagnosis) -> xr.Dataset:
+    """The gap report of a diagnosis (module docstring)."""
+    views = [g.base_view, g.final_view]
+    experiments = g.calibration + g.heldout
+    grid, pos = common_grid([e.schedule.total_pv for e in experiments], g.options.pv_step)
+    positions = {e.name: p for e, p in zip(experiments, pos)}
+    data = _series_vars(g, views, grid, positions) | _score_vars(g, grid, positions) | _slug_vars(experiments)
+    coords = {"model": ["base", "final"], "experiment": [e.name for e in experiments], "pv": ("pv", grid, {"units": "PV"}),
+              "role": ("experiment", ["calibration"] * len(g.calibration) + ["heldout"] * len(g.heldout))}
+    for part in (_cell_vars(g, views), _block_vars(g, views), _signature_vars(g, views), _candidate_vars(g)):
+        coords.update(part[0])
+        data.update(part[1])
+    params = g.base.parameters
+    theta = np.array([g.base.values(g.base_fit.u), g.base.values(g.final_fit.u)])
+    coords.update({"param": [p.label for p in params],
+                   "param_units": ("param", [_SPEC_UNITS[p.names[0]] for p in params])})
+    data["theta"] = (("model", "param"), theta, {"units": "see param_units"})
+    data["shift_fraction"] = ("param", (theta[1] - theta[0]) / (g.base.upper - g.base.lower),
+                              {"units": "1", "long_name": "parameter shift / range"})
+    data.update(_scalars(g))
+    final_strengths = g.final_fit.strengths
+    attrs = {
+        "verdict": g.verdict,
+        "ambiguity_set": json.dumps(g.ambiguity),
+        "effects": json.dumps([{"name": k, "strength": v} for k, v in final_strengths.items()]),
+        "accepted_steps": json.dumps(g.accepted),
+        "final_model": g.final_label,
+        "score_kind": g.score_kind,
+        "variables": " ".join(g.options.variables),
+        "interval": g.options.interval,
+        "alpha": g.options.alpha,
+        "cells": g.base.cells,
+        "pv_step": g.options.pv_step,
+        "noise_from_data": json.dumps({e.name: e.noise_from_data for e in experiments}),
+        "wall_time_s": g.wall_time_s,
+        "forward_runs": g.forward_runs,
+        "rule": json.dumps(dataclasses.asdict(g.options.rule)),
+    }
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _f(x) -> float | None:
+    x = float(x)
+    return round(x, 6) if np.isfinite(x) else None
+
+
+def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
+    """The machine-readable summary (``summary.json``) of a gap-report Dataset."""
+    r = report
+    ranked = []
+    for j, name in enumerate(r["candidate"].values):
+        row = {"name": str(name), "screen_z": _f(r["screen_z"][0, j]), "snr": _f(r["snr"][0, j]),
+               "absorbed": _f(r["absorbed"][0, j]), "shortlisted": bool(r["shortlisted"][0, j])}
+        if row["shortlisted"]:
+            row.update(fitted_strength=_f(r["fitted_strength"][0, j]), strength_z=_f(r["strength_z"][0, j]),
+                       delta_elpd=_f(r["delta_elpd"][0, j]),
+                       delta_elpd_se=_f(r["delta_elpd_se"][0, j]), gap_closed=_f(r["gap_closed"][0, j]),
+                       physical=bool(r["physical"][0, j]), passes=bool(r["passes"][0, j]))
+        ranked.append(row)
+    def descending(x):
+        return -x if x is not None else np.inf
+
+    ranked.sort(key=lambda row: (not row["shortlisted"], descending(row.get("delta_elpd")),
+                                 descending(row["screen_z"])))
+    gaps = r["gap_rank"].values
+    order = [int(i) for i in np.argsort(np.where(gaps > 0, gaps, np.inf)) if gaps[i] > 0][:top_cells]
+    cells = [{"variable": str(r["cell_variable"].values[i]), "experiment": str(r["cell_experiment"].values[i]),
+              "slug": str(r["cell_slug"].values[i]), "pv": [_f(r["cell_pv_start"][i]), _f(r["cell_pv_end"][i])],
+              "n": int(r["cell_n"][i]), "normalised_chi2": _f(r["cell_chi2"][0, i]),
+              "pvalue": _f(r["cell_pvalue"][0, i]), "rms": _f(r["cell_rms"][0, i]),
+              "normalised_chi2_final": _f(r["cell_chi2"][1, i])} for i in order]
+    rmse_ratio = {f"{v}:{e}": _f(r["rmse"][1, k] / r["rmse"][0, k]) if r["rmse"][0, k] > 0 else None
+                  for k, (v, e) in enumerate(zip(r["block_variable"].values, r["block_experiment"].values))}
+    scalar = {k: _f(r[k]) for k in ("chi2_base", "chi2_final", "dof", "chi2_pvalue", "gap_closed_calibration",
+                                    "gap_closed_heldout", "chi2_heldout_base", "chi2_heldout_final", "elpd_base",
+                                    "elpd_final", "coverage_calibration_base", "coverage_calibration_final",
+                                    "coverage_heldout_base", "coverage_heldout_final")}
+    return {
+        "verdict": r.attrs["verdict"],
+        "effects": json.loads(r.attrs["effects"]),
+        "ambiguity_set": json.loads(r.attrs["ambiguity_set"]),
+        "heldout_only": [str(n) for j, n in enumerate(r["candidate"].values) if r["passes"][0, j]]
+        if r.attrs["verdict"] == "none" else [],
+        "accepted_steps": json.loads(r.attrs["accepted_steps"]),
+        "final_model": r.attrs["final_model"],
+        "score": r.attrs["score_kind"],
+        "ranked_effects": ranked,
+        "gap_cells": cells,
+        "gap_closed": {"calibration": scalar["gap_closed_calibration"], "heldout": scalar["gap_closed_heldout"]},
+        "rmse_ratio": rmse_ratio,
+        "coverage": {k.replace("coverage_", ""): v for k, v in scalar.items() if k.startswith("coverage_")},
+        "fit": {k: v for k, v in scalar.items() if not k.startswith(("coverage_", "gap_closed"))},
+        "parameter_shift": {str(p): {"base": _f(r["theta"][0, i]), "final": _f(r["theta"][1, i]),
+                                     "fraction_of_range": _f(r["shift_fraction"][i]),
+                                     "units": str(r["param_units"].values[i])}
+                            for i, p in enumerate(r["param"].values)},
+        "wall_time_s": _f(r.attrs["wall_time_s"]),
+        "forward_runs": int(r.attrs["forward_runs"]),
+    }

@@ -1,0 +1,137 @@
+"""The ``diagnose`` stage: measured corefloods + base model + effect catalogue -> gap report Dataset.
+
+The stage reads its corefloods itself (bundled names or files, like the ``observations`` stage: the measurement
+model in their attrs is part of the prediction operator and of the error model) and keys its cache entry on their
+content. The optional input ``calibrated`` plugs in an upstream calibration (a Pareto set or posterior sample on
+dims (sample, param), e.g. from ``nsga2_calibration`` or ``emcee_sampler``) instead of the stage's own
+least-squares calibration (:mod:`~spflow.plugins.gap.base_calibration`).
+"""
+
+from __future__ import annotations
+
+import sys
+
+import xarray as xr
+from scipy.stats import chi2
+
+from spflow.core.errors import ParameterError
+from spflow.core.hashing import canonical_hash
+from spflow.core.params import Param
+from spflow.core.schema import DatasetSchema, Variable
+from spflow.core.stage import Stage, StageContext
+from spflow.io import load_coreflood
+from spflow.plugins.design.schemas import DESIGN
+from spflow.plugins.forward.numba_cache import source_digest
+
+from .base_calibration import parameter_set_starts
+from .base_model import TABLE_3_2_BASE, BaseModel
+from .catalogue import candidates_for
+from .diagnosis import Options, diagnose
+from .observed import MEASURABLE
+from .report import report_dataset
+from .verdict import Rule
+
+__all__ = ["Diagnose", "GAP_REPORT", "OPTION_PARAMS", "options_from"]
+
+#: Schema of the gap report (:mod:`spflow.plugins.gap.report`).
+GAP_REPORT = DatasetSchema(
+    dims=("model", "experiment", "pv", "cell", "candidate", "step", "param"),
+    variables={
+        "cell_chi2": Variable(("model", "cell"), units="1"),
+        "gap_rank": Variable(("cell",), kind="i", units="1"),
+        "screen_z": Variable(("step", "candidate"), units="1", allow_nan=True),
+        "delta_elpd": Variable(("step", "candidate"), units="nat", allow_nan=True),
+        "fingerprint_cos": Variable(("candidate", "candidate_b"), units="1"),
+        "theta": Variable(("model", "param"), units=None),
+        "chi2_base": Variable((), units="1"),
+    },
+    attrs=("verdict", "ambiguity_set", "effects", "final_model"),
+    doc="gap report: localisation, candidate scores, verdict, gap closed",
+)
+
+#: Stage parameters that are diagnosis options (also accepted in the [diagnosis] table of a CLI base file).
+OPTION_PARAMS = {
+    "variables": Param(list, ["dp", "oil_cut"], choices=list(MEASURABLE),
+                       doc="QoIs in the likelihood (recovery repeats the oil-cut readings: use one of the two)"),
+    "pv_step": Param(float, 0.1, bounds=(0.01, 1.0), unit="PV",
+                     doc="grid step (a multiple of the transducer interval keeps the AR(1) model exact)"),
+    "alpha": Param(float, 0.01, bounds=(1e-6, 0.5), doc="significance level of the calibration-gap test and cells"),
+    "shortlist": Param(int, 3, bounds=(1, 20), doc="candidates refitted per step (plus ambiguity partners)"),
+    "max_effects": Param(int, 2, bounds=(1, 5), doc="effects added greedily at most"),
+    "max_nfev": Param(int, 30, bounds=(2, 1000), doc="least-squares iterations per fit"),
+    "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
+    "nuisance_scale": Param(float, 0.5, bounds=(1e-3, 1e3),
+                            doc="prior scale of calibrated-parameter shifts in the unit box (projection, Laplace)"),
+    "replicates": Param(int, 200, bounds=(10, 100000), doc="replicated data sets of the signature checks"),
+    "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="seed of the replicates and extra starts"),
+    "min_delta": Param(float, 4.0, bounds=(0.0, None), unit="nat", doc="decision rule: minimum ELPD gain"),
+    "se_factor": Param(float, 2.0, bounds=(0.0, None), doc="decision rule: gain / standard error"),
+    "closed_fraction": Param(float, 0.5, bounds=(0.0, 1.0), doc="fraction of the gap an explanation must close"),
+}
+
+
+def options_from(values: dict) -> Options:
+    """:class:`Options` from validated option parameters (the calibration likelihood-ratio threshold of the
+    decision rule is the chi^2_1 quantile at ``alpha``)."""
+    rule = Rule(values["min_delta"], values["se_factor"], values["closed_fraction"],
+                float(chi2.isf(values["alpha"], 1)))
+    keep = {k: v for k, v in values.items() if k not in ("min_delta", "se_factor", "closed_fraction")}
+    return Options(**(keep | {"variables": tuple(values["variables"]), "rule": rule}))
+
+
+class Diagnose(Stage):
+    name = "diagnose"
+    version = "1"
+    description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
+    inputs = {"calibrated": DESIGN}
+    optional_inputs = frozenset({"calibrated"})
+    output = GAP_REPORT
+    params = {
+        "calibration": Param(list, ["BCF1"], doc="calibration corefloods: bundled names or .nc/.csv paths"),
+        "heldout": Param(list, ["BCF2", "BCF3"], doc="held-out corefloods (empty: leave-one-slug-out scores)"),
+        "base": Param(dict, TABLE_3_2_BASE, doc="base model: cells, effects, fixed, parameters, schedules"),
+        "catalogue": Param(list, [], doc="candidate effects (empty: every registered effect)"),
+        "polish": Param(bool, True, doc="least-squares polish of the best given calibrated parameter set"),
+    } | OPTION_PARAMS
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.base_model = BaseModel.from_mapping(self.params["base"])  # every check before any work
+        self.catalogue = list(self.params["catalogue"]) or None
+        candidates_for(self.catalogue, self.base_model.effects)
+        self.options = options_from({k: self.params[k] for k in OPTION_PARAMS})
+
+    @classmethod
+    def code_fingerprint(cls) -> str:
+        """The stage's source plus the simulator's, so that any physics edit reruns the diagnosis."""
+        return f"{super().code_fingerprint()}-{source_digest()[:16]}"
+
+    def _load(self) -> tuple[list[xr.Dataset], list[xr.Dataset]]:
+        if getattr(self, "_data", None) is None:
+            def load(sources, which):
+                out = []
+                for source in sources:
+                    try:
+                        out.append(load_coreflood(source))
+                    except (ValueError, OSError) as exc:
+                        raise ParameterError(f"stage 'diagnose' parameter {which!r}: {source!r}: {exc}") from None
+                return out
+
+            self._data = (load(self.params["calibration"], "calibration"), load(self.params["heldout"], "heldout"))
+        return self._data
+
+    def fingerprint(self) -> str:
+        return canonical_hash(self._load())
+
+    def run(self, ctx: StageContext, calibrated: xr.Dataset | None = None) -> xr.Dataset:
+        cal, held = self._load()
+        sets = None if calibrated is None else parameter_set_starts(self.base_model, calibrated)
+
+        def log(message: str) -> None:
+            if ctx.verbose:
+                print(f"[{ctx.node}] {message}", file=sys.stderr, flush=True)
+
+        result = diagnose(cal, held, self.base_model, self.catalogue, self.options,
+                          parallel=ctx.parallel() if ctx.n_jobs > 1 else None, parameter_sets=sets,
+                          polish=self.params["polish"], log=log)
+        return report_dataset(result)

@@ -1,0 +1,119 @@
+"""Weighted least squares in the unit box on an analytic model (a stand-in predictor with the Predictor
+interface): recovery of known parameters and strengths, the Jacobian, failure handling, parameter-set starts."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from spflow.core.errors import ParameterError, SpflowError
+from spflow.plugins.gap.base_calibration import calibrate_base, parameter_set_starts
+from spflow.plugins.gap.base_model import BaseModel
+from spflow.plugins.gap.catalogue import CandidateEffect
+from spflow.plugins.gap.error_model import BlockErrorModel
+from spflow.plugins.gap.layout import Block, Layout
+from spflow.plugins.gap.least_squares import fit
+
+PV = np.linspace(0.0, 4.0, 41)
+BASE = BaseModel.from_mapping({"parameters": {"AD31": [0.0, 2.0], "GAMHF": {"range": [10.0, 100.0],
+                                                                            "scale": "log"}}})
+EFFECT = CandidateEffect("drift", 0.0, 0.0, 1.0, False, (0.05, 1.0), (0.5,))
+
+
+def model(a, b, c):
+    return a * np.exp(-PV * b / 50.0) + c * PV
+
+
+class AnalyticPredictor:
+    """y = AD31 exp(-pv GAMHF / 50) + drift * pv, with the Predictor's predict() signature."""
+
+    def __init__(self, fail=lambda a, b: False):
+        self.base, self.fail, self.runs = BASE, fail, 0
+
+    def predict(self, points, experiments, variables=None):
+        out = []
+        for u, strengths in points:
+            a, b = self.base.values(u)
+            self.runs += 1
+            out.append(None if self.fail(a, b) else {"E": {"y": model(a, b, (strengths or {}).get("drift", 0.0))}})
+        return out
+
+
+def layout(observed, sigma=0.01):
+    return Layout((Block("y", "E", np.arange(PV.size), PV, observed, np.zeros(PV.size, int),
+                         BlockErrorModel(np.full(PV.size, sigma), 0.3)),))
+
+
+def test_recovers_parameters_and_strength():
+    truth = model(1.2, 80.0, 0.3)
+    result = fit(AnalyticPredictor(), layout(truth), [np.array([0.5, 0.5, 0.5])], (EFFECT,), max_nfev=200,
+                 diff_step=1e-6)
+    np.testing.assert_allclose(BASE.values(result.u), [1.2, 80.0], rtol=1e-4)
+    assert result.strengths["drift"] == pytest.approx(0.3, rel=1e-4)
+    assert result.chi2 < 1e-6
+    # the stored Jacobian is d(whitened residual)/d(unit coordinates): analytic derivative, whitened
+    a, b, c = 1.2, 80.0, 0.3
+    dy = np.column_stack([np.exp(-PV * b / 50) * 2.0,                                # dAD31/du = 2
+                          -a * PV / 50 * np.exp(-PV * b / 50) * b * np.log(10.0),     # log scale: db/du = b ln 10
+                          PV])
+    np.testing.assert_allclose(result.jacobian, layout(truth).whiten(dy), rtol=1e-3, atol=1e-3)
+
+
+def test_best_of_several_starts_and_failed_runs():
+    truth = model(0.8, 20.0, 0.0)
+    predictor = AnalyticPredictor(fail=lambda a, b: b > 90.0)   # the forward model "fails" in part of the box
+    result = fit(predictor, layout(truth), [np.array([1.0, 1.0]), np.array([0.2, 0.3])], max_nfev=100)
+    np.testing.assert_allclose(BASE.values(result.u), [0.8, 20.0], rtol=1e-3)
+    assert result.start is not None and result.start[1] == 0.3
+    with pytest.raises(SpflowError, match="every start"):
+        fit(AnalyticPredictor(fail=lambda a, b: True), layout(truth), [np.array([0.5, 0.5])])
+
+
+def test_given_parameter_sets_pick_the_best_member():
+    truth = model(1.5, 30.0, 0.0)
+    sets = xr.Dataset({"values": (("sample", "param"), [[0.2, 90.0], [1.5, 30.0], [1.0, 50.0]])},
+                      coords={"param": ["AD31", "GAMHF"]})
+    starts = parameter_set_starts(BASE, sets)
+    result = calibrate_base(AnalyticPredictor(), layout(truth), parameter_sets=starts, polish=False)
+    np.testing.assert_allclose(BASE.values(result.u), [1.5, 30.0])
+    assert result.nfev == 0 and result.chi2 < 1e-20
+    with pytest.raises(ParameterError, match="lack parameter 'GAMHF'"):
+        parameter_set_starts(BASE, sets.assign_coords(param=["AD31", "X"]))
+
+
+LINEAR = BaseModel.from_mapping({"parameters": {"AD31": [0.0, 2.0], "CRK": [0.0, 1.0]}})
+
+
+class LinearPredictor:
+    """y = AD31 + CRK pv: the leave-one-slug-out fits are ordinary least squares with a closed form."""
+
+    base = LINEAR
+
+    def predict(self, points, experiments, variables=None):
+        return [{"E": {"y": self.base.values(u)[0] + self.base.values(u)[1] * PV}} for u, _ in points]
+
+
+def test_leave_one_slug_out_equals_closed_form_least_squares():
+    from spflow.plugins.gap.least_squares import Fit
+    from spflow.plugins.gap.predictive_scores import leave_one_slug_out
+
+    rng = np.random.default_rng(4)
+    sigma = 0.05
+    observed = 0.7 + 0.2 * PV + sigma * rng.normal(size=PV.size)
+    slugs = np.searchsorted([1.0, 2.5, 99.0], PV - 1e-9)
+    lay = Layout((Block("y", "E", np.arange(PV.size), PV, observed, slugs,
+                        BlockErrorModel(np.full(PV.size, sigma), 0.0)),))
+    full = fit(LinearPredictor(), lay, [np.array([0.5, 0.5])], max_nfev=50, diff_step=1e-7)
+    assert isinstance(full, Fit)
+    out = leave_one_slug_out(LinearPredictor(), lay, full, max_nfev=50, diff_step=1e-7)
+    X = np.column_stack([np.ones(PV.size), PV])
+    for s in range(3):
+        held = slugs == s
+        coef = np.linalg.lstsq(X[~held], observed[~held], rcond=None)[0]
+        np.testing.assert_allclose(out.whitened[held], (X[held] @ coef - observed[held]) / sigma, atol=1e-5)
+        # the terms of a window: Gaussian with the Laplace parameter covariance of its own fit (prior tau 0.5)
+        J = X[~held] / sigma * np.array([2.0, 1.0])              # whitened Jacobian in unit coordinates
+        A = X[held] / sigma * np.array([2.0, 1.0])
+        S = np.eye(held.sum()) + A @ np.linalg.inv(J.T @ J + 4.0 * np.eye(2)) @ A.T
+        w = out.whitened[held]
+        expected = -0.5 * w @ np.linalg.solve(S, w) - 0.5 * np.linalg.slogdet(S)[1]
+        assert out.lpd[held].sum() == pytest.approx(expected, rel=1e-4)
