@@ -14,7 +14,8 @@ spec.loader.exec_module(gv)
 
 
 def record(scenario, snr, verdict, accepted=(), ambiguity=(), truth=None, closed=None, ratio=1.0):
-    return {"id": scenario, "scenario": scenario, "snr": snr, "verdict": verdict, "accepted": [list(a) for a in accepted],
+    return {"id": scenario, "scenario": scenario, "snr": snr, "verdict": verdict,
+            "accepted": [list(a) for a in accepted],
             "ambiguity_set": list(ambiguity), "truth_effects": truth or {}, "truth_fixed": {},
             "ranking": [a[0] for a in accepted], "gap_closed_calibration": closed, "heldout_rmse_ratio": ratio,
             "coverage_heldout": [0.5, 0.9], "parameter_bias": [0.3, 0.1], "cpu_s": 10.0, "forward_runs": 100,

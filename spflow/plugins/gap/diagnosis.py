@@ -85,7 +85,6 @@ class Step:
 class ModelView:
     """A calibrated model seen on every measured point (``layout_all``): predictions, residuals, intervals."""
 
-    label: str
     fit: Fit
     prediction: np.ndarray
     residual: np.ndarray
@@ -143,7 +142,7 @@ def _series(layout: Layout, values: np.ndarray, exp: Experiment) -> dict[str, np
     return out
 
 
-def _view(label, fitted, predictor, layout, experiments, options, rng) -> ModelView:
+def _view(fitted, predictor, layout, experiments, options, rng) -> ModelView:
     y, jac = raw_jacobian(predictor, layout, fitted, options.diff_step)
     cov = parameter_covariance(fitted.jacobian, options.nuisance_scale)
     std = predictive_std(layout, jac, cov)
@@ -162,7 +161,7 @@ def _view(label, fitted, predictor, layout, experiments, options, rng) -> ModelV
         sigs[exp.name] = predictive_pvalues(exp, _series(layout, obs, exp),
                                             [_series(layout, r, exp) for r in reps])
         pred_sigs[exp.name] = signatures(exp, _series(layout, y, exp))
-    return ModelView(label, fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs)
+    return ModelView(fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs)
 
 
 def _label(fitted: Fit) -> str:
@@ -273,9 +272,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
 
     rng = np.random.default_rng(options.seed)
     everything = cal + held
-    base_view = _view("base", base_fit, predictor, layout_all, everything, options, rng)
-    final_view = base_view if reference is base_fit else _view(_label(reference), reference, predictor, layout_all,
-                                                                everything, options, rng)
+    base_view = _view(base_fit, predictor, layout_all, everything, options, rng)
+    final_view = base_view if reference is base_fit else _view(reference, predictor, layout_all, everything, options,
+                                                                rng)
     return GapDiagnosis(options, base, cal, held, candidates, layout_fit, layout_score, layout_all, kind, base_fit,
                         pvalue, pvalue < options.alpha, steps, accepted, decided, ambiguity, reference,
                         _label(reference), w_base, w_ref, base_view, final_view,

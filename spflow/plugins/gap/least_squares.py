@@ -81,8 +81,8 @@ class WhitenedProblem:
     def residuals(self, zs: list[np.ndarray]) -> list[np.ndarray]:
         preds = self.predictor.predict([model_point(z, self.n_params, self.candidates) for z in zs],
                                        self.layout.experiments, self.layout.variables)
-        return [np.full(self.layout.size, _FAILED) if p is None else self.layout.whiten(self.layout.vector(p) - self.obs)
-                for p in preds]
+        return [np.full(self.layout.size, _FAILED) if p is None
+                else self.layout.whiten(self.layout.vector(p) - self.obs) for p in preds]
 
     def fun(self, z):
         return self.residuals([np.asarray(z, float)])[0]

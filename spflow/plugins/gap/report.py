@@ -216,7 +216,8 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
     grid, pos = common_grid([e.schedule.total_pv for e in experiments], g.options.pv_step)
     positions = {e.name: p for e, p in zip(experiments, pos)}
     data = _series_vars(g, views, grid, positions) | _score_vars(g, grid, positions) | _slug_vars(experiments)
-    coords = {"model": ["base", "final"], "experiment": [e.name for e in experiments], "pv": ("pv", grid, {"units": "PV"}),
+    coords = {"model": ["base", "final"], "experiment": [e.name for e in experiments],
+              "pv": ("pv", grid, {"units": "PV"}),
               "role": ("experiment", ["calibration"] * len(g.calibration) + ["heldout"] * len(g.heldout))}
     for part in (_cell_vars(g, views), _block_vars(g, views), _signature_vars(g, views), _candidate_vars(g)):
         coords.update(part[0])

@@ -81,14 +81,14 @@ def options_from(values: dict) -> Options:
 
 class Diagnose(Stage):
     name = "diagnose"
-    version = "1"
+    version = "2"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
     output = GAP_REPORT
     params = {
-        "calibration": Param(list, ["BCF1"], doc="calibration corefloods: bundled names or .nc/.csv paths"),
-        "heldout": Param(list, ["BCF2", "BCF3"], doc="held-out corefloods (empty: leave-one-slug-out scores)"),
+        "calibration": Param(list, ["BCF1", "BCF2"], doc="calibration corefloods: bundled names or .nc/.csv paths"),
+        "heldout": Param(list, ["BCF3"], doc="held-out corefloods (empty: leave-one-slug-out scores)"),
         "base": Param(dict, TABLE_3_2_BASE, doc="base model: cells, effects, fixed, parameters, schedules"),
         "catalogue": Param(list, [], doc="candidate effects (empty: every registered effect)"),
         "polish": Param(bool, True, doc="least-squares polish of the best given calibrated parameter set"),

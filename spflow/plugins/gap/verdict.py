@@ -1,26 +1,29 @@
 """The decision rule of a gap diagnosis (gap notes §6.1 stage 2, step 4).
 
 A refitted candidate *passes* when its out-of-sample gain is large and significant, its strength is physical and
-significantly different from the base strength (the effect is present, the "scaling factor != 0" of detection in
-climate attribution):
+significantly different from the base strength (the effect is present: the "scaling factor != 0" of detection in
+climate attribution), and the calibration data ask for it:
 
     dELPD > min_delta (4)  and  dELPD > se_factor (2) * SE  and  s_hat inside the physical range
     and  |v_hat - v_base| > se_factor * sd(v_hat)  and  chi2_ref - chi2_k > min_chi2_drop,
 
 with ``v`` the strength's unit-box coordinate and ``sd`` its linearised posterior standard deviation from the
-refit (:func:`~spflow.plugins.gap.quantification.parameter_covariance`). The last test matters: a refit that
+refit (:func:`~spflow.plugins.gap.quantification.parameter_covariance`). The strength test matters: a refit that
 leaves the strength at its base value can still predict held-out data better, only because its calibrated
-parameters landed elsewhere. The last one is the nested likelihood-ratio test on the calibration data (the
-refit contains the reference at the base strength; ``min_chi2_drop`` is the chi^2_1 quantile at the diagnosis's
+parameters landed elsewhere. The last test is the nested likelihood-ratio test on the calibration data (the refit
+contains the reference at the base strength; ``min_chi2_drop`` is the chi^2_1 quantile at the diagnosis's
 ``alpha``): an effect the calibration data do not ask for is not added, in particular not as a second effect on
-top of a first one whose fit left some misfit. (An effect that is off in the base model can only be added with ``s >= 0``, so the
-sign test of the notes is the physical range.) Among passing candidates the **ambiguity set** is every candidate whose gain is within
-``se_factor`` standard errors of the best one's, with the measurement SE of their difference
+top of a first one whose fit left some misfit. (An effect that is off in the base model can only be added with
+``s >= 0``, so the sign test of the notes is the physical range.)
+
+Among passing candidates the **ambiguity set** is every candidate whose gain is within ``se_factor`` standard
+errors of the best one's, with the measurement SE of their difference
 (:mod:`~spflow.plugins.gap.predictive_scores`). One member is an ``effect``, several are ``ambiguous`` (an effect
-accepted in a later greedy step is no longer ambiguous with the first one: the answer is "both"). The pointwise
-SE of ``loo_compare`` was tried here and rejected: it put a candidate that closed 0.1 % of the bundled data's
+accepted in a later greedy step is no longer ambiguous with the first one: the answer is "both"). The pointwise SE
+of ``loo_compare`` was tried for the set and rejected: it put a candidate that closed 0.1 % of the bundled data's
 calibration gap in one set with the one that closed 54 %, because for localised gaps that SE is of the order of
-the gains themselves, and it did not bring the true effect into any set it was missing from on the twins. Effects are added greedily: a second one must pass the same test on top of the first.
+the gains themselves, and on the twins it never brought a missing true effect into a set. Effects are added
+greedily: a second one must pass the same test on top of the first.
 
 The final verdict needs a significant calibration gap for anything but ``none``:
 
