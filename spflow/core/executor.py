@@ -6,6 +6,8 @@
 * Nodes to execute run by topological generation. A generation of several nodes runs them side by side with joblib
   (each node then gets ``n_jobs=1`` for its own work); a lone node gets the whole worker budget for its inner
   parallelism. One parallel layer per level.
+* Nodes with the same key (the same stage, params and upstream data, e.g. one node copied into two included
+  sub-pipelines) are computed once per run; the others read the stored result.
 * Each finished node is validated and written to the store as soon as it completes, so an exception or
   KeyboardInterrupt loses nothing that finished; the next run resumes from there.
 """
@@ -171,9 +173,14 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
     order = [n for n in plan.order if n in selected]
 
     to_run: list[str] = []
+    twins: dict[str, str] = {}  # node -> the node computing the same key in this run
+    first_with: dict[str, str] = {}
     result = RunResult(store, {n: plan.keys[n] for n in order})
     for name in order:
         key = plan.keys[name]
+        if key in first_with:
+            twins[name] = first_with[key]
+            continue
         if name in forced:
             store.discard(key)
         elif store.has(key):
@@ -186,6 +193,7 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
             )
             store.discard(key)
         to_run.append(name)
+        first_with[key] = name
     store.update_manifest(pipeline.name, {name: plan.prov[name] for name in result.cached})
 
     if only:
@@ -218,7 +226,8 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
         memory[name] = out
         result.executed.append(name)
         if verbose:
-            print(f"[spflow] {name}: ran {stage.name} in {seconds:.2f} s", file=sys.stderr)
+            print(f"[spflow] ({len(result.executed)}/{len(to_run)}) {name}: ran {stage.name} in {seconds:.2f} s",
+                  file=sys.stderr)
 
     def prepare(name: str) -> dict[str, xr.Dataset]:
         stage = plan.stages[name]
@@ -229,7 +238,9 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
                 schema.validate(ds, stage=stage.name, port=port)
         return inputs
 
-    sub = plan.graph.subgraph(to_run)
+    sub = _run_graph(plan.graph, to_run, twins)
+    if verbose and to_run:
+        print(f"[spflow] {pipeline.name}: {len(to_run)} node(s) to run, {len(result.cached)} cached", file=sys.stderr)
     jb_backend = BACKENDS[backend]
     with _backend_context(backend, scheduler):
         for generation in nx.topological_generations(sub):
@@ -240,12 +251,28 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
                 for name in generation:
                     ctx = StageContext(name, n_jobs=jobs, backend=jb_backend, verbose=verbose)
                     inputs = prepare(name)
+                    if verbose:
+                        print(f"[spflow] {name}: running {plan.stages[name].name} ...", file=sys.stderr)
                     try:
                         out, seconds = _execute(plan.stages[name], ctx, inputs)
                     except Exception as exc:
                         raise StageError(name, plan.stages[name].name, f"{type(exc).__name__}: {exc}") from exc
                     finish(name, out, seconds)
+    computed_twins = [n for n in twins if twins[n] in result.executed]
+    result.cached += computed_twins
+    store.update_manifest(pipeline.name, {name: plan.prov[name] for name in computed_twins})
     return result
+
+
+def _run_graph(graph: nx.DiGraph, to_run: list[str], twins: dict[str, str]) -> nx.DiGraph:
+    """The dependency graph of the nodes to run, a twin's consumers waiting for the node that computes its key."""
+    sub = nx.DiGraph()
+    sub.add_nodes_from(to_run)
+    for up, down in graph.edges:
+        up = twins.get(up, up)
+        if down in sub and up in sub:
+            sub.add_edge(up, down)
+    return sub
 
 
 def _run_parallel(generation, plan, prepare, finish, jobs, jb_backend, verbose) -> None:

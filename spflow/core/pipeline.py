@@ -61,6 +61,31 @@ class Pipeline:
         self.nodes[node].dataset = dataset.load()
         return self
 
+    def include(self, other: Pipeline, prefix: str, *, share: Iterable[str] = ()) -> Pipeline:
+        """Copy every node of ``other`` into this pipeline as ``<prefix>.<node>`` (wiring renamed alike).
+
+        ``share`` names nodes of ``other`` that are *not* copied: their consumers are wired to the node of the same
+        name already in this pipeline (e.g. one ``observations`` node feeding two included sub-pipelines). A node
+        keeps its provenance key under the new name, so results cached by running ``other`` alone are reused.
+        """
+        shared = set(share)
+        for name in shared:
+            other._node(name)
+            self._node(name)
+
+        def renamed(name: str) -> str:
+            return name if name in shared else f"{prefix}.{name}"
+
+        for node in other.nodes.values():
+            if node.name in shared:
+                continue
+            if node.dataset is not None:
+                self.add_data(renamed(node.name), node.dataset)
+                continue
+            self.add(renamed(node.name), node.stage, params=node.params,
+                     inputs={port: renamed(up) for port, up in node.inputs.items()})
+        return self
+
     def set_stage(self, node: str, stage: str, params: Mapping[str, Any] | None = None) -> Pipeline:
         """Swap the stage a node runs (e.g. surrogate ``pce`` -> ``pck``), keeping its wiring."""
         self._node(node).stage = stage
