@@ -1,8 +1,9 @@
-"""The ``spflow`` command: run, status, list, clean.
+"""The ``spflow`` command: run, status, report, list, clean, diagnose.
 
-    spflow run PIPELINE [--until NODE] [--only NODE] [--force NODE] [--jobs N] [--backend loky|threads|dask]
-                        [--scheduler ADDRESS] [--cache DIR] [--out DIR]
-    spflow status PIPELINE [--cache DIR]
+    spflow run PIPELINE [--quick] [--until NODE] [--only NODE] [--force NODE] [--jobs N]
+                        [--backend loky|threads|dask] [--scheduler ADDRESS] [--cache DIR] [--out DIR]
+    spflow status PIPELINE [--quick] [--cache DIR]
+    spflow report PIPELINE [--quick] [--cache DIR] [--out DIR]
     spflow list [stages|effects|params]
     spflow clean [--cache DIR] [--tmp]
     spflow diagnose --observations FILE [FILE ...] [--heldout FILE ...] --base CONFIG [--catalogue NAMES]
@@ -10,13 +11,16 @@
 
 PIPELINE is a path to a Python file, a name in ``./pipelines/`` (``demo`` -> ``pipelines/demo.py``) or a dotted
 module; the module defines ``pipeline`` (a Pipeline or a function returning one) and optionally
-``report(result, outdir)``, called after a successful run.
+``report(result, outdir)``, called after a successful run; ``report.html`` (:mod:`spflow.core.html_report`) is
+written next to the figures it makes. ``--quick`` passes ``quick=True`` to ``pipeline`` (and ``report``) when they
+take it: the pipeline's small-budget profile.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import inspect
 import runpy
 import sys
 from pathlib import Path
@@ -24,6 +28,7 @@ from typing import Any
 
 from spflow.core.errors import SpflowError
 from spflow.core.executor import BACKENDS, run, status
+from spflow.core.html_report import provenance_rows, sections_from, write_html_report
 from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry
 from spflow.plugins.gap.command import add_parser as add_diagnose_parser
@@ -44,37 +49,70 @@ def load_pipeline_module(spec: str) -> dict[str, Any]:
         raise SpflowError(f"pipeline {spec!r} not found: not a .py file, not pipelines/{spec}.py, not a module") from None
 
 
-def _pipeline_from(namespace: dict[str, Any], spec: str) -> Pipeline:
+def _accepts_quick(func) -> bool:
+    return "quick" in inspect.signature(func).parameters
+
+
+def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) -> Pipeline:
     obj = namespace.get("pipeline")
+    if quick and not (callable(obj) and not isinstance(obj, Pipeline) and _accepts_quick(obj)):
+        raise SpflowError(f"pipeline {spec!r} has no quick profile (its pipeline() takes no 'quick' argument)")
     if callable(obj) and not isinstance(obj, Pipeline):
-        obj = obj()
+        obj = obj(quick=True) if quick else obj()
     if not isinstance(obj, Pipeline):
         raise SpflowError(f"pipeline module {spec!r} must define 'pipeline' (a Pipeline or a function returning one)")
     return obj
 
 
+def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argparse.Namespace) -> None:
+    """Call the module's ``report`` (if any), print its lines and write ``report.html`` next to its figures."""
+    report = namespace.get("report")
+    outdir = Path(args.out or Path("out") / pipe.name)
+    outdir.mkdir(parents=True, exist_ok=True)
+    lines = None
+    if report is not None:
+        lines = report(result, outdir, quick=True) if args.quick and _accepts_quick(report) else report(result, outdir)
+        for line in _flat(lines):
+            print(line)
+    html = write_html_report(outdir / "report.html", f"spflow report: {pipe.name}", sections_from(outdir, lines),
+                             provenance_rows(result))
+    print(f"report: {html.resolve()}")
+
+
+def _flat(lines) -> list[str]:
+    if isinstance(lines, dict):
+        return [f"== {section}" if i == 0 else line for section, text in lines.items()
+                for i, line in enumerate([None, *text])]
+    return list(lines or [])
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     namespace = load_pipeline_module(args.pipeline)
-    pipe = _pipeline_from(namespace, args.pipeline)
+    pipe = _pipeline_from(namespace, args.pipeline, args.quick)
     result = run(pipe, cache=args.cache, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                  until=args.until, only=args.only, force=args.force or (), verbose=True)
     print(f"{pipe.name}: {len(result.executed)} node(s) executed, {len(result.cached)} from cache")
-    for node in result.executed:
-        print(f"  ran    {node}")
-    for node in result.cached:
-        print(f"  cached {node}")
-    report = namespace.get("report")
-    if report is not None and not (args.until or args.only):
-        outdir = Path(args.out or Path("out") / pipe.name)
-        outdir.mkdir(parents=True, exist_ok=True)
-        for line in report(result, outdir) or []:
-            print(line)
+    if not (args.until or args.only):
+        _write_report(namespace, pipe, result, args)
+    return 0
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    namespace = load_pipeline_module(args.pipeline)
+    pipe = _pipeline_from(namespace, args.pipeline, args.quick)
+    stale = [r.node for r in status(pipe, cache=args.cache) if not r.fresh]
+    if stale:
+        raise SpflowError(f"{len(stale)} node(s) of {pipe.name!r} are not in the cache ({', '.join(stale[:5])}"
+                          f"{', ...' if len(stale) > 5 else ''}); run `spflow run {args.pipeline}"
+                          f"{' --quick' if args.quick else ''}` first")
+    result = run(pipe, cache=args.cache)
+    _write_report(namespace, pipe, result, args)
     return 0
 
 
 def _cmd_status(args: argparse.Namespace) -> int:
     namespace = load_pipeline_module(args.pipeline)
-    pipe = _pipeline_from(namespace, args.pipeline)
+    pipe = _pipeline_from(namespace, args.pipeline, args.quick)
     rows = status(pipe, cache=args.cache)
     width = max(len(r.node) for r in rows)
     for r in rows:
@@ -138,13 +176,19 @@ def build_parser() -> argparse.ArgumentParser:
     p_status = sub.add_parser("status", help="say for each node whether it is fresh, and why it is stale")
     p_status.add_argument("pipeline")
 
+    p_report = sub.add_parser("report", help="write the HTML report of a pipeline whose results are all cached")
+    p_report.add_argument("pipeline")
+    p_report.add_argument("--out", metavar="DIR", help="where the report goes (default out/<pipeline>)")
+    for p in (p_run, p_status, p_report):
+        p.add_argument("--quick", action="store_true", help="the pipeline's quick profile (small budgets)")
+
     p_list = sub.add_parser("list", help="list registered stages, effects and forward-model parameters")
     p_list.add_argument("what", nargs="?", choices=["stages", "effects", "params", "all"], default="all")
 
     p_clean = sub.add_parser("clean", help="delete the cache")
     p_clean.add_argument("--tmp", action="store_true", help="only delete unfinished temporary entries")
 
-    for p in (p_run, p_status, p_clean):
+    for p in (p_run, p_status, p_report, p_clean):
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
     add_diagnose_parser(sub)
     return parser
@@ -152,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    handler = {"run": _cmd_run, "status": _cmd_status, "list": _cmd_list, "clean": _cmd_clean,
+    handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
                "diagnose": diagnose_command}[args.command]
     try:
         return handler(args)

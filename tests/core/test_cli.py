@@ -74,3 +74,44 @@ def test_errors_are_reported_without_traceback(workdir, capsys):
     assert "spflow: error: stage 'toy_scale' parameter 'factor' = 99.0 is outside the allowed range [0.0, 10.0]" in err
     assert main(["run", "nonexistent"]) == 2
     assert "pipeline 'nonexistent' not found" in capsys.readouterr().err
+
+
+QUICK_PIPELINE = textwrap.dedent(
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import spflow
+
+    def pipeline(quick=False):
+        p = spflow.Pipeline("quicktest_quick" if quick else "quicktest")
+        p.add("src", "toy_source", params={"value": 1.0, "n": 3 if quick else 7})
+        return p
+
+    def report(result, outdir):
+        y = result["src"]["y"].values
+        fig, ax = plt.subplots()
+        ax.plot(y)
+        fig.savefig(outdir / "fig_3_2_ramp.png")
+        plt.close(fig)
+        return [f"n = {y.size}"]
+    """
+)
+
+
+def test_quick_profile_and_html_report(workdir, capsys):
+    (workdir / "pipelines" / "quicktest.py").write_text(QUICK_PIPELINE)
+    assert main(["report", "quicktest", "--quick"]) == 2
+    assert "1 node(s) of 'quicktest_quick' are not in the cache" in capsys.readouterr().err
+    assert main(["run", "quicktest", "--quick"]) == 0
+    out = capsys.readouterr().out
+    assert "n = 3" in out
+    html = (workdir / "out" / "quicktest_quick" / "report.html").read_text()
+    assert "n = 3" in html and "Fig. 3.2: ramp" in html and "data:image/png;base64," in html
+    assert "toy_source" in html and "&quot;n&quot;: 3" in html  # provenance table: stage and params
+    (workdir / "out" / "quicktest_quick" / "report.html").unlink()
+    assert main(["report", "quicktest", "--quick"]) == 0  # from the cache: nothing runs, the report is rewritten
+    assert "report: " in capsys.readouterr().out
+    assert (workdir / "out" / "quicktest_quick" / "report.html").is_file()
+    assert main(["run", "clitest", "--quick"]) == 2
+    assert "pipeline 'clitest' has no quick profile" in capsys.readouterr().err

@@ -1,0 +1,122 @@
+"""A self-contained HTML report of a pipeline run: the report's text, every figure embedded, and provenance.
+
+A pipeline module's ``report(result, outdir)`` writes figures into ``outdir`` and returns the lines to print: either
+a list of lines (one section holding every PNG of ``outdir``), or a mapping ``{sub-directory: lines}`` (one section
+per sub-directory of ``outdir`` with the PNGs found there). :func:`write_html_report` turns that into
+``outdir/report.html`` -- figures inlined as base64 PNG, so the file can be mailed or archived alone -- ending with
+the table of every node: stage, version, parameters, provenance key, whether it ran or came from the cache, seconds.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime
+import html
+import json
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["Section", "sections_from", "provenance_rows", "write_html_report"]
+
+_CSS = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
+h1 { border-bottom: 2px solid #446; } h2 { margin-top: 2em; border-bottom: 1px solid #aab; }
+pre { background: #f6f6f9; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
+figure { margin: 1.5em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { font-size: 0.9em; color: #555; }
+table { border-collapse: collapse; font-size: 0.8em; } td, th { border: 1px solid #ccd; padding: 0.3em 0.5em;
+vertical-align: top; } th { background: #eef; } td.params { font-family: monospace; max-width: 40em;
+word-break: break-all; } nav a { margin-right: 1em; }
+"""
+
+
+@dataclass
+class Section:
+    """One part of the report: a title, the text lines the pipeline printed, and its figures."""
+
+    title: str
+    lines: list[str] = field(default_factory=list)
+    figures: list[Path] = field(default_factory=list)
+
+
+def _title(name: str) -> str:
+    return name.replace("_", " ").strip().capitalize() or "Summary"
+
+
+def sections_from(outdir: Path, lines: list[str] | Mapping[str, list[str]] | None) -> list[Section]:
+    """Sections of a report function's return value (module docstring) with the PNGs it wrote."""
+    outdir = Path(outdir)
+    if lines is None or not isinstance(lines, Mapping):
+        return [Section("Summary", list(lines or []), sorted(outdir.glob("*.png")))]
+    return [Section(_title(sub), list(text), sorted((outdir / sub).glob("*.png"))) for sub, text in lines.items()]
+
+
+def caption(path: Path) -> str:
+    """``fig_3_10_pareto_fronts.png`` -> ``Fig. 3.10: pareto fronts``; other names -> the words of the stem."""
+    match = re.match(r"fig_(\d+)_(\d+)_?(.*)", path.stem)
+    if match:
+        chapter, number, rest = match.groups()
+        return f"Fig. {chapter}.{number}: {rest.replace('_', ' ')}".rstrip(": ")
+    match = re.match(r"fig_([a-e])(\d+)_?(.*)", path.stem)
+    if match:
+        appendix, number, rest = match.groups()
+        return f"Fig. {appendix.upper()}.{number}: {rest.replace('_', ' ')}"
+    return path.stem.replace("_", " ")
+
+
+def provenance_rows(result) -> list[dict]:
+    """Per node of a :class:`~spflow.core.executor.RunResult`: stage, version, params, key, ran/cached, seconds."""
+    rows = []
+    for node, key in result.keys.items():
+        record = result.store.record(key) if result.store.has(key) else {}
+        rows.append({
+            "node": node, "stage": record.get("stage", "?"), "version": record.get("version", "?"),
+            "params": record.get("params", {}), "key": key,
+            "state": "ran" if node in result.executed else "cached", "seconds": record.get("seconds"),
+        })
+    return rows
+
+
+def _figure_html(path: Path) -> str:
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    text = html.escape(caption(path))
+    return (f'<figure><img alt="{text}" src="data:image/png;base64,{data}">'
+            f"<figcaption>{text} <small>({html.escape(path.name)})</small></figcaption></figure>")
+
+
+def _provenance_html(rows: list[dict]) -> str:
+    head = "<tr><th>node</th><th>stage</th><th>version</th><th>run</th><th>seconds</th><th>key</th><th>params</th></tr>"
+    body = []
+    for r in rows:
+        seconds = f"{r['seconds']:.2f}" if isinstance(r["seconds"], (int, float)) else ""
+        params = html.escape(json.dumps(r["params"], sort_keys=True, default=str))
+        body.append(f"<tr><td>{html.escape(r['node'])}</td><td>{html.escape(str(r['stage']))}</td>"
+                    f"<td>{html.escape(str(r['version']))}</td><td>{r['state']}</td><td>{seconds}</td>"
+                    f"<td><code>{r['key'][:16]}</code></td><td class='params'>{params}</td></tr>")
+    return f"<table>{head}{''.join(body)}</table>"
+
+
+def write_html_report(path: Path, title: str, sections: list[Section], provenance: list[dict]) -> Path:
+    """Write the report (module docstring) to ``path`` atomically and return it."""
+    path = Path(path)
+    anchors = [f"s{i}" for i in range(len(sections))]
+    nav = "".join(f'<a href="#{a}">{html.escape(s.title)}</a>' for a, s in zip(anchors, sections))
+    parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+             f"<style>{_CSS}</style></head><body><h1>{html.escape(title)}</h1>",
+             f"<p>Written {datetime.datetime.now().isoformat(timespec='seconds')} by spflow.</p>",
+             f"<nav>{nav}<a href='#provenance'>Provenance</a></nav>"]
+    for anchor, section in zip(anchors, sections):
+        parts.append(f"<h2 id='{anchor}'>{html.escape(section.title)}</h2>")
+        if section.lines:
+            parts.append(f"<pre>{html.escape(chr(10).join(section.lines))}</pre>")
+        parts.extend(_figure_html(f) for f in section.figures)
+    parts.append("<h2 id='provenance'>Provenance</h2><p>Every node of the run: the stage it ran, its parameters and "
+                 "the provenance key its result is cached under.</p>")
+    parts.append(_provenance_html(provenance))
+    parts.append("</body></html>")
+    tmp = path.with_suffix(".html.tmp")
+    tmp.write_text("\n".join(parts), encoding="utf-8")
+    tmp.replace(path)
+    return path
