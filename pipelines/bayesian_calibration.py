@@ -33,10 +33,13 @@ LEVELS = [0.05, 0.5, 0.95]
 def pipeline(samples: int = 300, cells: int = 100, degree_max: int = 3, sampler: str = "emcee_sampler",
              surrogate: str = "pce", chains: int = 4, mcmc_samples: int = 100_000, burn: int = 20_000,
              thin: int = 5, draws: int = 200, prior_draws: int = 64, seed: int = 2024,
-             observed: list[str] | None = None) -> spflow.Pipeline:
-    """The chapter-4 DAG. ``observed``: bundled names or coreflood files for BCF1-3 (default: the bundled data)."""
+             observed: list[str] | None = None, quick: bool = False) -> spflow.Pipeline:
+    """The chapter-4 DAG. ``observed``: bundled names or coreflood files for BCF1-3 (default: the bundled data);
+    ``quick``: small budgets."""
+    if quick:
+        samples, cells, degree_max, mcmc_samples, burn, draws, prior_draws = 80, 40, 2, 20_000, 5_000, 40, 16
     model = {"cells": cells}
-    p = spflow.Pipeline("bayesian_calibration")
+    p = spflow.Pipeline("bayesian_calibration_quick" if quick else "bayesian_calibration")
     p.add("space", "parameter_space", params={"names": list(TABLE_4_1), "ranges": TABLE_4_1})
     p.add("design", "lhs_design", inputs={"space": "space"}, params={"samples": samples, "seed": seed})
     p.add("responses", "forward", inputs={"design": "design"}, params={"experiments": ["BCF1"], **model})

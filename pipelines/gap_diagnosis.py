@@ -20,10 +20,12 @@ import spflow
 from spflow.plugins.gap.base_model import TABLE_3_2_BASE
 
 
-def pipeline(cells: int = 60) -> spflow.Pipeline:
-    p = spflow.Pipeline("gap_diagnosis")
+def pipeline(cells: int = 60, quick: bool = False) -> spflow.Pipeline:
+    """``quick``: a coarser grid, one effect at most, two candidates refitted, shorter least squares."""
+    search = {"shortlist": 2, "max_effects": 1, "max_nfev": 12} if quick else {}
+    p = spflow.Pipeline("gap_diagnosis_quick" if quick else "gap_diagnosis")
     p.add("diagnosis", "diagnose", params={"calibration": ["BCF1", "BCF2"], "heldout": ["BCF3"],
-                                           "base": dict(TABLE_3_2_BASE, cells=cells)})
+                                           "base": dict(TABLE_3_2_BASE, cells=30 if quick else cells), **search})
     return p
 
 

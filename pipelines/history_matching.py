@@ -30,11 +30,13 @@ EXPERIMENTS = ["BCF1", "BCF2", "BCF3"]
 
 def pipeline(samples: int = 200, cells: int = 100, generations: int = 100, population: int = 120,
              degree_max: int = 5, solver: str = "lars", seed: int = 2024, screening: bool = False,
-             observed: list[str] | None = None) -> spflow.Pipeline:
+             observed: list[str] | None = None, quick: bool = False) -> spflow.Pipeline:
     """The chapter-3 DAG. ``observed``: bundled names or coreflood files for BCF1-3 (default: the bundled data);
-    ``screening``: put a Sobol' screening of the space in front of the design."""
+    ``screening``: put a Sobol' screening of the space in front of the design; ``quick``: small budgets."""
+    if quick:
+        samples, cells, generations, population, degree_max = 60, 40, 20, 40, 3
     model = {"cells": cells}
-    p = spflow.Pipeline("history_matching")
+    p = spflow.Pipeline("history_matching_quick" if quick else "history_matching")
     p.add("space", "parameter_space", params={"names": list(TABLE_3_2), "ranges": TABLE_3_2})
     space = "space"
     if screening:

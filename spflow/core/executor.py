@@ -107,6 +107,16 @@ class RunResult(Mapping):
     def __iter__(self) -> Iterator[str]:
         return iter(self.keys)
 
+    def scoped(self, prefix: str) -> RunResult:
+        """The results of the nodes included as ``<prefix>.<node>`` (``Pipeline.include``) under their own names,
+        plus the unprefixed (shared) nodes -- what the included pipeline's own ``report`` expects."""
+        lead = f"{prefix}."
+        rename = {n: n[len(lead):] for n in self.keys if n.startswith(lead)}
+        rename.update({n: n for n in self.keys if "." not in n and n not in rename.values()})
+        return RunResult(self.store, {new: self.keys[old] for old, new in rename.items()},
+                         [rename[n] for n in self.executed if n in rename],
+                         [rename[n] for n in self.cached if n in rename])
+
     def __len__(self) -> int:
         return len(self.keys)
 

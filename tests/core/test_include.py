@@ -59,3 +59,14 @@ def test_include_rejects_clashes_and_unknown_shared_nodes(toys, log):
         whole.include(chain(str(log)), "one")
     with pytest.raises(spflow.PipelineError, match="no node 'zz'"):
         whole.include(chain(str(log)), "three", share=["zz"])
+
+
+def test_scoped_result_serves_an_included_pipeline_under_its_own_names(toys, log, cache):
+    whole = spflow.Pipeline("whole")
+    whole.add("a", "toy_source", params={"value": 2.0, "log": str(log)})
+    whole.include(chain(str(log), factor=4.0), "two", share=["a"])
+    result = spflow.run(whole, cache=cache)
+    two = result.scoped("two")
+    assert sorted(two) == ["a", "b", "c", "d", "e"]
+    np.testing.assert_array_equal(two["e"]["y"].values, result["two.e"]["y"].values)
+    assert sorted(two.executed) == ["a", "b", "c", "d", "e"] and two.cached == []

@@ -1,0 +1,89 @@
+"""The main job: the thesis's whole workflow on the bundled BCF1-3 data, one cached DAG, one HTML report.
+
+1. ``screening.*``: Sobol' screening of the Table 3.1 sub-models on BCF1 (Fig. 3.2; ``pipelines/screening.py``).
+2. ``hm.*``: chapter 3 -- Table 3.2 design -> simulator -> PCE -> NSGA-II on BCF1, held-out BCF2/BCF3
+   (Figs. 3.10-3.14; ``pipelines/history_matching.py``).
+3. ``proxy.*``: the chapter-3 proxies checked on independent simulator runs: the PCE and a PC-Kriging model on the
+   same training runs (Figs. 3.4-3.8, 3.15).
+4. ``bc.*``: chapter 4 -- Table 4.1 design -> PCE -> MCMC -> posterior predictive on BCF1-3 (Apps. B-E, Figs.
+   4.4-4.5; ``pipelines/bayesian_calibration.py``).
+5. ``gap.*``: where the calibrated model misses the data and which unmodelled effect explains it
+   (``pipelines/gap_diagnosis.py``).
+
+Nodes shared by several parts (the bundled observations, for one) are computed once; a part already run on its own
+with the same settings comes from the cache. ``--quick`` runs the same DAG with small budgets (a first look).
+
+    spflow run workflow --jobs 2            # complete run (see the README for measured times)
+    spflow run workflow --quick --jobs 2    # quick profile
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import spflow
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bayesian_calibration  # noqa: E402
+import gap_diagnosis  # noqa: E402
+import history_matching  # noqa: E402
+import screening  # noqa: E402
+
+
+def proxy_check(p: spflow.Pipeline, samples: int = 100, cells: int = 100, seed: int = 7) -> None:
+    """Nodes ``proxy.*``: a PC-Kriging model on the chapter-3 training runs, and independent LHS validation runs
+    scoring it and the PCE (Eq. 3.15)."""
+    hm_inputs = dict(p.nodes["hm.surrogate"].inputs)
+    proxy = {k: v for k, v in p.nodes["hm.surrogate"].params.items() if k in ("variables", "experiments")}
+    p.add("proxy.pck", "pck", inputs=hm_inputs, params=proxy)
+    p.add("proxy.design", "lhs_design", inputs={"space": hm_inputs["space"]}, params={"samples": samples, "seed": seed})
+    p.add("proxy.responses", "forward", inputs={"design": "proxy.design"}, params={"experiments": ["BCF1"],
+                                                                                    "cells": cells})
+    for kind, node in (("pce", "hm.surrogate"), ("pck", "proxy.pck")):
+        p.add(f"proxy.validation_{kind}", "surrogate_validation",
+              inputs={"surrogate": node, "design": "proxy.design", "responses": "proxy.responses"})
+
+
+def pipeline(quick: bool = False) -> spflow.Pipeline:
+    """The whole workflow; ``quick``: every part's small-budget profile."""
+    p = spflow.Pipeline("workflow_quick" if quick else "workflow")
+    p.include(screening.pipeline(quick=quick), "screening")
+    p.include(history_matching.pipeline(quick=quick), "hm")
+    proxy_check(p, **({"samples": 40, "cells": 40} if quick else {}))
+    p.include(bayesian_calibration.pipeline(quick=quick), "bc")
+    p.include(gap_diagnosis.pipeline(quick=quick), "gap")
+    return p
+
+
+def _proxy_report(result: spflow.RunResult, outdir: Path) -> list[str]:
+    """Both chapter-3 proxies on the independent runs: R^2 of the final and maximum values, Eq. 3.15 errors."""
+    lines = [f"{'proxy':6s} {'QoI':10s} {'R2 final':>9s} {'R2 max':>9s} {'median R2 (per PV)':>19s} "
+             f"{'mean err':>9s} {'var err':>9s}   (Eq. 3.15, independent LHS runs of BCF1)"]
+    for kind in ("pce", "pck"):
+        val = result[f"proxy.validation_{kind}"]
+        for q in range(val.sizes["qoi"]):
+            row = val.isel(qoi=q)
+            variable = str(row["qoi_variable"].values)
+            r2 = val["r2"].where(val["output_variable"] == variable).median()
+            lines.append(f"{kind:6s} {variable:10s} {float(row['r2_final']):9.4f} {float(row['r2_max']):9.4f} "
+                         f"{float(r2):19.4f} {float(row['mean_l2_error']):9.2e} {float(row['variance_l2_error']):9.2e}")
+    return lines
+
+
+def report(result: spflow.RunResult, outdir: Path) -> dict[str, list[str]]:
+    """One section per part (sub-directories of ``outdir``), each written by that part's own report."""
+    sections = {}
+    for prefix, module in (("screening", screening), ("hm", history_matching), ("bc", bayesian_calibration),
+                           ("gap", gap_diagnosis)):
+        sub = outdir / module.__name__
+        sub.mkdir(parents=True, exist_ok=True)
+        sections[module.__name__] = module.report(result.scoped(prefix), sub)
+    proxies = outdir / "proxy_validation"
+    proxies.mkdir(exist_ok=True)
+    sections["proxy_validation"] = _proxy_report(result, proxies)
+    return dict(sorted(sections.items(), key=lambda kv: _ORDER.index(kv[0])))
+
+
+_ORDER = ["screening", "history_matching", "proxy_validation", "bayesian_calibration", "gap_diagnosis"]
