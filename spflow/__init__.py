@@ -25,6 +25,7 @@ from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry, register_plugin, reset_registry, unregister_plugin
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.forward.effects import Effect
 from spflow.plugins.forward.simulate import simulate
 from spflow.io import load_coreflood
 from spflow import synthetic
@@ -37,6 +38,7 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 __all__ = [
     "CacheIntegrityWarning",
     "DatasetSchema",
+    "Effect",
     "NodeStatus",
     "Param",
     "ParameterError",
