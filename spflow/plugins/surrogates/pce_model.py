@@ -89,7 +89,7 @@ class PCE(Surrogate):
         z = self.to_unit(x)
         mean = np.empty((z.shape[0], self.coefficients.shape[0]))
         coef_t = self.coefficients.T
-        with single_threaded_blas():
+        with single_threaded_blas(z.shape[0] * coef_t.size):
             for start in range(0, z.shape[0], _BLOCK):
                 stop = min(start + _BLOCK, z.shape[0])
                 np.matmul(design_matrix(z[start:stop], self.indices), coef_t, out=mean[start:stop])
