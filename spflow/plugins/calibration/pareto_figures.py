@@ -44,6 +44,8 @@ def _label(calibration: xr.Dataset, k: int) -> str:
 def plot_fronts(calibration: xr.Dataset, path: str | Path) -> Path:
     """Fig. 3.10 (fronts at the snapshot generations, log axes) and the run's history; returns the PNG path."""
     plt = _pyplot()
+    from matplotlib import ticker
+
     fig, (ax, hx) = plt.subplots(1, 2, figsize=(11, 4.4), gridspec_kw={"width_ratios": [1.3, 1]})
     snaps = calibration["snapshot"].values
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(snaps)))
@@ -53,6 +55,10 @@ def plot_fronts(calibration: xr.Dataset, path: str | Path) -> Path:
         ax.plot(f[:, 0], f[:, 1], "o-", ms=3, lw=0.8, color=color, label=f"N_gen = {int(g)} ({len(f)} points)")
     ax.set_xscale("log")
     ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):  # labelled ticks at 1, 2, 5 x 10^k: readable when a front spans < 1 decade
+        axis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(ticker.LogFormatterSciNotation(labelOnlyBase=False))
+        axis.set_minor_formatter(ticker.NullFormatter())
     ax.set_xlabel(_label(calibration, 0))
     ax.set_ylabel(_label(calibration, 1))
     ax.set_title(f"Pareto front, training coreflood {calibration.attrs['training']}")
