@@ -13,6 +13,7 @@ The thesis's initial model calibration (Fig. 2.1, section 2.12, Algorithm 1 line
    replaced by the priors (``Pipeline.include(..., share=["space"])``): its nodes are named ``<front_end>.<node>``.
 
     spflow run lab_priors --jobs 2
+    spflow run lab_priors --quick      # the front end's quick profile
 """
 
 from __future__ import annotations
@@ -51,11 +52,13 @@ def _front_end(name: str):
 
 
 def pipeline(front_end: str | None = "history_matching", mode: str = "relative", relative: float = 0.2,
-             k: float = 2.0, paths: dict[str, str] | None = None, **front_end_args) -> spflow.Pipeline:
+             k: float = 2.0, paths: dict[str, str] | None = None, quick: bool = False,
+             **front_end_args) -> spflow.Pipeline:
     """Lab fits -> ``space`` (priors) [-> the ``front_end`` DAG built with ``front_end_args``].
 
     ``front_end``: "history_matching", "bayesian_calibration" or None (fits and priors only). ``paths``: fit node ->
     lab table path (default: the bundled synthetic tables). ``mode``/``relative``/``k``: see the ``priors`` stage.
+    ``quick``: the front end's own quick profile (small budgets).
     """
     if front_end is not None and front_end not in FRONT_ENDS:
         raise ValueError(f"front_end must be one of {sorted(FRONT_ENDS)} or None, got {front_end!r}")
@@ -72,7 +75,7 @@ def pipeline(front_end: str | None = "history_matching", mode: str = "relative",
           params={"names": list(table), "ranges": {n: table[n] for n in UNFITTED}, "mode": mode,
                   "relative": relative, "k": k})
     if front_end is not None:
-        p.include(_front_end(front_end).pipeline(**front_end_args), front_end, share=["space"])
+        p.include(_front_end(front_end).pipeline(quick=quick, **front_end_args), front_end, share=["space"])
     return p
 
 

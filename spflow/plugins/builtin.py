@@ -18,6 +18,8 @@ def spflow_register_stages(register):
     from spflow.plugins.forward.stage import Forward
     from spflow.plugins.gap.stage import Diagnose
     from spflow.plugins.lab.lab_stages_a import FitAdsorption, FitPolymerCoreflood, FitPolymerRheology, FitTracer
+    from spflow.plugins.lab.lab_stages_b import FitDesaturation, FitIFT, FitMEViscosity, FitPhaseBehaviour
+    from spflow.plugins.lab.priors import Priors
     from spflow.plugins.observations import Observations
     from spflow.plugins.screening.morris_screening import MorrisScreening
     from spflow.plugins.screening.selected_space import SelectedSpace
@@ -31,7 +33,8 @@ def spflow_register_stages(register):
     for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
                   SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation,
                   PCKStage, GPStage, NSGA2Calibration, ParetoDesign, EmceeSampler, MHSampler, PosteriorPredictive,
-                  Diagnose, FitPolymerRheology, FitPolymerCoreflood, FitAdsorption, FitTracer):
+                  Diagnose, FitPolymerRheology, FitPolymerCoreflood, FitAdsorption, FitTracer, FitPhaseBehaviour,
+                  FitIFT, FitMEViscosity, FitDesaturation, Priors):
         register(stage)
 
 
