@@ -31,10 +31,9 @@ from threadpoolctl import threadpool_limits
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks" / "figures"))
-sys.path.insert(0, str(ROOT / "pipelines"))
 
 import spflow  # noqa: E402
-from fig_3_15_pck_band import QOIS, pipeline, register_surrogates, validation_scores  # noqa: E402
+from fig_3_15_pck_band import QOIS, pipeline, validation_scores  # noqa: E402
 from spflow.plugins.forward.simulate import simulate  # noqa: E402
 from spflow.plugins.surrogates.contract import load_surrogate  # noqa: E402
 from spflow.plugins.surrogates.training_data import training_set  # noqa: E402
@@ -71,7 +70,6 @@ def main(argv=None) -> None:
                         help="refit the proxies even if cached (the cache fingerprints stage classes, not helpers)")
     args = parser.parse_args(argv)
 
-    register_surrogates()
     p = pipeline(args.samples, args.validation, args.cells, PROXIES)
     spflow.run(p, cache=args.cache, jobs=args.jobs, until=["runs_train", "runs_val"])  # the simulations
     fit_times = {}

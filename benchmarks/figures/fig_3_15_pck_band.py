@@ -2,10 +2,11 @@
 
 As in §3.8: the 9 parameters of Table 3.2, N_s = 200 LHS training runs of BCF1, the same space and design as the PCE.
 A pipeline (``parameter_space`` -> ``lhs_design`` -> ``forward`` -> ``pck`` / ``pce``, cached in ``--cache``) fits
-both proxies of the Δp and recovery series; ``--validation`` independent LHS runs score them. The figure shows, for
-three of the validation parameter sets, the simulator (markers), the PC-Kriging mean with its ±2σ band and the PCE
-mean (top), and -- since the band is thin at that scale -- the band around the proxy mean with the simulator's
-offsets from both proxies (bottom). Writes ``docs/figures/fig_3_15_pck_band.png`` and prints the validation errors and 2σ coverage.
+both proxies of the Δp and recovery series; ``--validation`` independent LHS runs score them. The figure
+(:func:`spflow.plugins.surrogates.figures.band_figure`) shows, for three of the validation parameter sets, the
+simulator (markers), the PC-Kriging mean with its ±2σ band and the PCE mean (top), and -- since the band is thin at
+that scale -- the band around the proxy mean with the simulator's offsets from both proxies (bottom). Writes
+``docs/figures/fig_3_15_pck_band.png`` and prints the validation errors and 2σ coverage.
 
 Run: ``.venv/bin/python benchmarks/figures/fig_3_15_pck_band.py [--samples 200] [--validation 200] [--jobs 2]``.
 """
@@ -13,47 +14,21 @@ Run: ``.venv/bin/python benchmarks/figures/fig_3_15_pck_band.py [--samples 200] 
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "pipelines"))
 
 import spflow  # noqa: E402
-from prior_spread import TABLE_3_2  # noqa: E402
-from spflow.plugins.forward.schedule import as_schedule  # noqa: E402
+from spflow.plugins.design.thesis_tables import TABLE_3_2  # noqa: E402
 from spflow.plugins.surrogates.contract import load_surrogate  # noqa: E402
-from spflow.plugins.surrogates.kriging_stage import GPStage, PCKStage  # noqa: E402
-from spflow.plugins.surrogates.pce_stage import PCEStage  # noqa: E402
+from spflow.plugins.surrogates.figure_data import two_sigma_coverage  # noqa: E402
+from spflow.plugins.surrogates.figures import band_figure  # noqa: E402
 from spflow.plugins.surrogates.regression import is_constant  # noqa: E402
 from spflow.plugins.surrogates.training_data import training_set  # noqa: E402
 
 QOIS = (("dp", 1e-3, "Δp (kPa)"), ("recovery", 1.0, "recovery (fraction OOIP)"))
-COLOURS = ("tab:blue", "tab:orange", "tab:green")
-
-
-class SurrogateStages:
-    """Registers the surrogate stages the built-in plugin does not (yet) register."""
-
-    def __init__(self, stages):
-        self.stages = stages
-
-    @spflow.hookimpl
-    def spflow_register_stages(self, register):
-        for cls in self.stages:
-            register(cls)
-
-
-def register_surrogates() -> None:
-    missing = [c for c in (PCEStage, PCKStage, GPStage) if c.name not in spflow.get_registry().stages]
-    if missing:
-        spflow.register_plugin(SurrogateStages(missing), name="fig_3_15_surrogates")
 
 
 def pipeline(samples: int, validation: int, cells: int, proxies: dict[str, tuple[str, dict]]) -> spflow.Pipeline:
@@ -81,8 +56,7 @@ def validation_scores(model, data) -> dict[str, tuple[float, float]]:
         y, mu = data.y[:, cols], mean[:, cols]
         err, spread = np.sum((mu - y) ** 2, axis=0), np.sum((y - y.mean(axis=0)) ** 2, axis=0)
         eps = np.divide(err, spread, out=np.zeros_like(err), where=~is_constant(y))
-        inside = np.abs(mu - y) <= 2.0 * np.sqrt(var[:, cols]) + 1e-12 * np.abs(y).max()
-        out[qoi] = (float(np.mean(eps)), float(inside.mean()))
+        out[qoi] = (float(np.mean(eps)), two_sigma_coverage(y, mu, var[:, cols]))
     return out
 
 
@@ -98,7 +72,6 @@ def main(argv=None) -> None:
                         help="refit the proxies even if cached (the cache fingerprints stage classes, not helpers)")
     args = parser.parse_args(argv)
 
-    register_surrogates()
     proxies = {"pck": ("pck", {"mode": "sequential", "degree_max": 3}),
                "pce": ("pce", {"solver": "lars", "degree_max": 5})}
     result = spflow.run(pipeline(args.samples, args.validation, args.cells, proxies), cache=args.cache,
@@ -111,40 +84,8 @@ def main(argv=None) -> None:
             loo = np.mean(model.loo[val.outputs.columns(qoi, "BCF1")])
             print(f"{name:>6} {qoi:>9} {loo:13.2e} {eps:13.2e} {cover:12.3f}")
 
-    show = np.arange(3)
-    pck_mean, pck_var = models["pck"].predict(val.x[show])
-    pce_mean, _ = models["pce"].predict(val.x[show])
-    fig, axes = plt.subplots(2, len(QOIS), figsize=(11, 7.5), sharex=True, gridspec_kw={"height_ratios": [3, 2]})
-    for (ax, ax_err), (qoi, scale, label) in zip(axes.T, QOIS):
-        cols = val.outputs.columns(qoi, "BCF1")
-        pv = val.outputs.pv[cols]
-        for k, colour in zip(range(show.size), COLOURS):
-            mean, sd = pck_mean[k, cols] * scale, np.sqrt(pck_var[k, cols]) * scale
-            sim = val.y[show[k], cols] * scale
-            ax.fill_between(pv, mean - 2 * sd, mean + 2 * sd, color=colour, alpha=0.3, lw=0,
-                            label="PC-Kriging ±2σ" if k == 0 else None)
-            ax.plot(pv, mean, color=colour, lw=1.4, label="PC-Kriging mean" if k == 0 else None)
-            ax.plot(pv, pce_mean[k, cols] * scale, color=colour, lw=1.0, ls="--", label="PCE mean" if k == 0 else None)
-            ax.plot(pv, sim, "o", ms=3, mfc="none", color=colour, label="simulator" if k == 0 else None)
-            # the band is thin at this scale: the lower panel shows it around the proxy, with the simulator's offset
-            ax_err.fill_between(pv, -2 * sd, 2 * sd, color=colour, alpha=0.25, lw=0)
-            ax_err.plot(pv, sim - mean, "o-", ms=2.5, lw=0.8, mfc="none", color=colour)
-            ax_err.plot(pv, sim - pce_mean[k, cols] * scale, color=colour, lw=0.8, ls="--")
-        for boundary in np.cumsum([slug.pv for slug in as_schedule("BCF1").slugs])[:-1]:  # slug ends (Table 2.5)
-            ax.axvline(boundary, color="0.6", lw=0.8, ls=":")
-            ax_err.axvline(boundary, color="0.6", lw=0.8, ls=":")
-        ax.set_ylabel(label)
-        ax.set_title(f"BCF1 {qoi}: 3 validation parameter sets")
-        ax_err.axhline(0.0, color="k", lw=0.6)
-        ax_err.set_ylabel(f"simulator − proxy mean ({label.split('(')[-1].rstrip(')')})")
-        ax_err.set_xlabel("injected pore volumes (PV)")
-        ax_err.set_title("±2σ band (shaded), simulator − PC-Kriging (o), − PCE (--)", fontsize=9)
-    axes[0, 0].legend(loc="upper right", fontsize=8)
-    fig.suptitle(f"PC-Kriging proxy (N_s = {args.samples} LHS runs, Table 3.2 space): mean ± 2σ vs simulator")
-    fig.tight_layout()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(args.out, dpi=120)
-    plt.close(fig)
+    band_figure(result["pck"], result["design_val"], result["runs_val"], args.out, n_show=3, reference=result["pce"],
+                variables=[q for q, _, _ in QOIS])
     print(f"wrote {args.out}")
 
 

@@ -4,10 +4,12 @@ The simulator runs go through an spflow pipeline (``parameter_space`` -> ``lhs_d
 ``--cache``): nested training designs made of LHS batches (50, +50, +100, +300 by default, so N_s = 50, 100, 200,
 500) and one independent LHS validation set (``--validation`` runs; the thesis uses 10^4). For every N_s the ``pce``
 stage fits dp and recovery (0.1 PV series, p <= 5, q = 0.9) with OLS and with hybrid LARS, and the
-``surrogate_validation`` stage scores it on the validation set. Writes to ``docs/figures``:
+``surrogate_validation`` stage scores it on the validation set. Writes to ``docs/figures`` (Figs. 3.3, 3.4 and 3.8
+drawn by :mod:`spflow.plugins.surrogates.figures`):
 
 * ``fig_3_3_pce_loo.png``: ε_LOO^mean and ε_emp^mean per QoI against N_s (Fig. 3.3);
-* ``fig_3_4_pce_scatter.png``: proxy vs simulator for max Δp and final recovery at three N_s (Figs. 3.4-3.5);
+* ``fig_3_4_pce_scatter.png``: proxy vs simulator at three N_s, every PV step and max Δp / final recovery
+  (Figs. 3.4-3.5);
 * ``fig_3_7_pce_moment_errors.png``: relative L2 errors (Eq. 3.15) of the mean and variance curves (Fig. 3.7);
 * ``fig_3_8_pce_moments.png``: mean ± std over PV, PCE (Eqs. 3.11-3.12) vs the validation runs (Figs. 3.8-3.9);
 
@@ -31,11 +33,12 @@ ROOT = Path(__file__).resolve().parents[2]
 import spflow  # noqa: E402
 from spflow.plugins.design.thesis_tables import TABLE_3_2  # noqa: E402
 from spflow.core.stage import StageContext  # noqa: E402
-from spflow.plugins.surrogates.contract import load_surrogate  # noqa: E402
+from spflow.plugins.surrogates.figure_data import error_history  # noqa: E402
+from spflow.plugins.surrogates.figures import (convergence_figure, moments_figure,  # noqa: E402
+                                               proxy_vs_simulator_figure)
 from spflow.plugins.surrogates.pce_stage import PCEStage  # noqa: E402
-from spflow.plugins.surrogates.validation import SurrogateValidation, matching_columns  # noqa: E402
+from spflow.plugins.surrogates.validation import SurrogateValidation  # noqa: E402
 
-QOIS = (("dp", 1e-3, "Δp (kPa)"), ("recovery", 1.0, "recovery (–)"))
 SOLVERS = ("ols", "lars")
 
 
@@ -80,82 +83,39 @@ def main(argv=None) -> None:
             fits[solver, n] = PCEStage(solver=solver).run(ctx, space=space, **sub)
             checks[solver, n] = SurrogateValidation().run(ctx, surrogate=fits[solver, n], design=design_val,
                                                           responses=runs_val)
+    history = {solver.upper(): error_history([fits[solver, n] for n in sizes]) for solver in SOLVERS}
 
     print(f"BCF1, Table 3.2 space, {args.cells} cells; validation: {args.validation} LHS runs")
     print(f"{'solver':<6}{'N_s':>5}{'p':>3}  {'LOO dp':>9}{'LOO rec':>9}{'emp dp':>9}{'emp rec':>9}"
           f"{'R2 maxdp':>10}{'R2 final rec':>13}{'L2 mean dp':>11}{'L2 var dp':>10}{'L2 var rec':>11}")
     for (solver, n), ds in fits.items():
-        model, v = load_surrogate(ds), checks[solver, n]
-        per = {q: model.outputs.variable == q for q, _, _ in QOIS}
+        h, v = history[solver.upper()].sel(n_s=n), checks[solver, n]
         qoi = {str(name): i for i, name in enumerate(v["qoi_variable"].values)}
-        print(f"{solver:<6}{n:>5}{ds.attrs['degree']:>3}  {model.loo[per['dp']].mean():>9.2e}"
-              f"{model.loo[per['recovery']].mean():>9.2e}{model.empirical[per['dp']].mean():>9.2e}"
-              f"{model.empirical[per['recovery']].mean():>9.2e}{float(v['r2_max'][qoi['dp']]):>10.4f}"
+        print(f"{solver:<6}{n:>5}{ds.attrs['degree']:>3}  {float(h['loo'].sel(variable='dp')):>9.2e}"
+              f"{float(h['loo'].sel(variable='recovery')):>9.2e}{float(h['empirical'].sel(variable='dp')):>9.2e}"
+              f"{float(h['empirical'].sel(variable='recovery')):>9.2e}{float(v['r2_max'][qoi['dp']]):>10.4f}"
               f"{float(v['r2_final'][qoi['recovery']]):>13.4f}{float(v['mean_l2_error'][qoi['dp']]):>11.2e}"
               f"{float(v['variance_l2_error'][qoi['dp']]):>10.2e}"
               f"{float(v['variance_l2_error'][qoi['recovery']]):>11.2e}")
 
     args.out.mkdir(parents=True, exist_ok=True)
-    # Fig. 3.3: mean LOO and empirical errors against N_s
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
-    for ax, (name, _, label) in zip(axes, QOIS):
-        for solver, style in zip(SOLVERS, ("-", "--")):
-            loo, emp = [], []
-            for n in sizes:
-                model = load_surrogate(fits[solver, n])
-                cols = model.outputs.variable == name
-                loo.append(model.loo[cols].mean())
-                emp.append(model.empirical[cols].mean())
-            ax.semilogy(sizes, loo, "o" + style, color="tab:blue", label=f"ε_LOO^mean ({solver.upper()})")
-            ax.semilogy(sizes, emp, "s" + style, color="tab:orange", label=f"ε_emp^mean ({solver.upper()})")
-        ax.set_title(label.split(" (")[0] + " profile")
-        ax.set_xlabel("training runs N_s")
-        ax.grid(alpha=0.3, which="both")
-    axes[0].set_ylabel("mean relative error over the PV grid")
-    axes[0].legend(fontsize=8)
-    fig.suptitle("PCE errors on the training design (cf. thesis Fig. 3.3)")
-    fig.tight_layout()
-    fig.savefig(args.out / "fig_3_3_pce_loo.png", dpi=110)
-    plt.close(fig)
+    convergence_figure(history, args.out / "fig_3_3_pce_loo.png")
+    shown = dict.fromkeys([sizes[0], sizes[min(2, len(sizes) - 1)], sizes[-1]])
+    proxy_vs_simulator_figure({f"PCE (OLS), N_s = {n}": fits["ols", n] for n in shown}, design_val, runs_val,
+                              args.out / "fig_3_4_pce_scatter.png")
+    moments_figure({f"PCE (OLS), N_s = {n}": fits["ols", n] for n in dict.fromkeys([sizes[0], sizes[-1]])},
+                   runs_val, args.out / "fig_3_8_pce_moments.png")
 
-    # Figs. 3.4-3.5: proxy vs simulator on the validation set
-    shown = [sizes[0], sizes[min(2, len(sizes) - 1)], sizes[-1]]
-    fig, axes = plt.subplots(2, len(shown), figsize=(4 * len(shown), 7.6))
-    for j, n in enumerate(shown):
-        model = load_surrogate(fits["ols", n])
-        truth = matching_columns(runs_val, model.outputs)
-        x = design_val["values"].sel(param=model.names).values
-        predicted = model.predict(x)[0]
-        v = checks["ols", n]
-        qoi = {str(name): i for i, name in enumerate(v["qoi_variable"].values)}
-        for i, (name, scale, label, reduce, r2) in enumerate([
-                ("dp", 1e-3, "max Δp (kPa)", np.max, "r2_max"), ("recovery", 1.0, "final recovery (–)",
-                                                                 lambda a, axis: a[:, -1], "r2_final")]):
-            cols = model.outputs.columns(name, "BCF1")
-            sim, pce = reduce(truth[:, cols], axis=1) * scale, reduce(predicted[:, cols], axis=1) * scale
-            ax = axes[i, j]
-            ax.plot(sim, pce, ".", ms=3, alpha=0.6)
-            lims = [min(sim.min(), pce.min()), max(sim.max(), pce.max())]
-            ax.plot(lims, lims, "k-", lw=0.8)
-            ax.set_title(f"N_s = {n}: R² = {float(v[r2][qoi[name]]):.3f}")
-            ax.set_xlabel(f"simulator {label}")
-            ax.set_ylabel(f"PCE {label}")
-    fig.suptitle(f"PCE (OLS) vs simulator on {args.validation} independent LHS runs (cf. thesis Figs. 3.4-3.5)")
-    fig.tight_layout()
-    fig.savefig(args.out / "fig_3_4_pce_scatter.png", dpi=110)
-    plt.close(fig)
-
-    # Fig. 3.7: relative L2 errors of mean and variance curves
+    # Fig. 3.7: relative L2 errors of mean and variance curves against N_s (from the surrogate_validation outputs)
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
     for ax, what in zip(axes, ("mean_l2_error", "variance_l2_error")):
         for solver, style in zip(SOLVERS, ("-", "--")):
-            for (name, _, label), colour in zip(QOIS, ("tab:red", "tab:green")):
+            for name, colour in zip(("dp", "recovery"), ("tab:red", "tab:green")):
                 values = []
                 for n in sizes:
                     v = checks[solver, n]
                     values.append(float(v[what][list(v["qoi_variable"].values).index(name)]))
-                ax.semilogy(sizes, values, "o" + style, color=colour,
-                            label=f"{label.split(' (')[0]} ({solver.upper()})")
+                ax.semilogy(sizes, values, "o" + style, color=colour, label=f"{name} ({solver.upper()})")
         ax.axhline(2.5e-2, color="k", lw=0.8, ls=":", label="2.5e-2 (thesis threshold)")
         ax.set_title("mean" if what.startswith("mean") else "variance")
         ax.set_xlabel("training runs N_s")
@@ -165,28 +125,6 @@ def main(argv=None) -> None:
     fig.suptitle(f"PCE moments vs {args.validation} LHS runs (cf. thesis Fig. 3.7)")
     fig.tight_layout()
     fig.savefig(args.out / "fig_3_7_pce_moment_errors.png", dpi=110)
-    plt.close(fig)
-
-    # Figs. 3.8-3.9: mean and standard deviation over PV
-    fig, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
-    for i, (name, scale, label) in enumerate(QOIS):
-        for n, colour in zip((sizes[0], sizes[-1]), ("tab:orange", "tab:blue")):
-            model = load_surrogate(fits["ols", n])
-            cols = model.outputs.columns(name, "BCF1")
-            mean, var = model.moments()
-            axes[i, 0].plot(model.outputs.pv[cols], mean[cols] * scale, color=colour, label=f"PCE, N_s = {n}")
-            axes[i, 1].plot(model.outputs.pv[cols], np.sqrt(var[cols]) * scale, color=colour, label=f"PCE, N_s = {n}")
-        truth = runs_val[name].sel(experiment="BCF1")
-        axes[i, 0].plot(truth["pv"], truth.mean("sample") * scale, "k.", ms=4, label=f"{args.validation} LHS runs")
-        axes[i, 1].plot(truth["pv"], truth.std("sample") * scale, "k.", ms=4, label=f"{args.validation} LHS runs")
-        axes[i, 0].set_ylabel(f"mean {label}")
-        axes[i, 1].set_ylabel(f"std {label}")
-    for ax in axes[-1]:
-        ax.set_xlabel("injected pore volumes (PV)")
-    axes[0, 0].legend(fontsize=8)
-    fig.suptitle("PCE (OLS) mean and standard deviation vs LHS runs (cf. thesis Figs. 3.8-3.9)")
-    fig.tight_layout()
-    fig.savefig(args.out / "fig_3_8_pce_moments.png", dpi=110)
     plt.close(fig)
     print(f"wrote {', '.join(f.name for f in sorted(args.out.glob('fig_3_[3478]_pce*.png')))} to {args.out}")
 
