@@ -4,7 +4,8 @@
 2. ``hm.*``: chapter 3 -- Table 3.2 design -> simulator -> PCE -> NSGA-II on BCF1, held-out BCF2/BCF3
    (Figs. 3.10-3.14; ``pipelines/history_matching.py``).
 3. ``proxy.*``: the chapter-3 proxies checked on independent simulator runs: the PCE and a PC-Kriging model on the
-   same training runs (Figs. 3.4-3.8, 3.15).
+   same training runs (Figs. 3.4-3.5, 3.8, 3.15), and the PCE's convergence with the design size (Algorithm 2,
+   Fig. 3.3).
 4. ``bc.*``: chapter 4 -- Table 4.1 design -> PCE -> MCMC -> posterior predictive on BCF1-3 (Apps. B-E, Figs.
    4.4-4.5; ``pipelines/bayesian_calibration.py``).
 5. ``gap.*``: where the calibrated model misses the data and which unmodelled effect explains it
@@ -44,6 +45,9 @@ def proxy_check(p: spflow.Pipeline, samples: int = 100, cells: int = 100, seed: 
     for kind, node in (("pce", "hm.surrogate"), ("pck", "proxy.pck")):
         p.add(f"proxy.validation_{kind}", "surrogate_validation",
               inputs={"surrogate": node, "design": "proxy.design", "responses": "proxy.responses"})
+    p.add("proxy.adaptive", "adaptive_pce", inputs={"space": hm_inputs["space"]},
+          params={**proxy, "cells": cells, "n_initial": samples // 2, "n_increment": samples // 2,
+                  "n_max": 2 * samples, "seed": seed + 1})
 
 
 def pipeline(quick: bool = False) -> spflow.Pipeline:
@@ -58,7 +62,17 @@ def pipeline(quick: bool = False) -> spflow.Pipeline:
 
 
 def _proxy_report(result: spflow.RunResult, outdir: Path) -> list[str]:
-    """Both chapter-3 proxies on the independent runs: R^2 of the final and maximum values, Eq. 3.15 errors."""
+    """Both chapter-3 proxies on the independent runs (Figs. 3.3-3.5, 3.8, 3.15): R^2 of the final and maximum
+    values, Eq. 3.15 errors."""
+    from spflow.plugins.surrogates import figures
+
+    pce, pck = result["hm.surrogate"], result["proxy.pck"]
+    design, runs = result["proxy.design"], result["proxy.responses"]
+    figures.convergence_figure(result["proxy.adaptive"], outdir / "fig_3_3_pce_convergence.png")
+    figures.proxy_vs_simulator_figure({"PCE": pce, "PC-Kriging": pck}, design, runs,
+                                      outdir / "fig_3_4_proxy_vs_simulator.png")
+    figures.moments_figure(pce, runs, outdir / "fig_3_8_pce_moments.png")
+    figures.band_figure(pck, design, runs, outdir / "fig_3_15_pck_band.png", reference=pce)
     lines = [f"{'proxy':6s} {'QoI':10s} {'R2 final':>9s} {'R2 max':>9s} {'median R2 (per PV)':>19s} "
              f"{'mean err':>9s} {'var err':>9s}   (Eq. 3.15, independent LHS runs of BCF1)"]
     for kind in ("pce", "pck"):

@@ -82,7 +82,7 @@ def convergence_figure(history: xr.Dataset | Mapping[str, xr.Dataset | Sequence[
     histories = {label: error_history(h) for label, h in history.items()}
     variables = list(dict.fromkeys(str(v) for h in histories.values() for v in h["variable"].values))
     plt = _pyplot()
-    fig, axes = plt.subplots(1, len(variables), figsize=(5 * len(variables), 3.9), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(1, len(variables), figsize=(max(6.5, 5 * len(variables)), 3.9), sharey=True, squeeze=False)
     for ax, v in zip(axes[0], variables):
         for (label, h), style in zip(histories.items(), ("-", "--", ":", "-.")):
             if v not in h["variable"].values:
@@ -99,7 +99,7 @@ def convergence_figure(history: xr.Dataset | Mapping[str, xr.Dataset | Sequence[
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
     axes[0, 0].set_ylabel("mean relative error over the outputs (1)")
-    fig.suptitle("Proxy errors on the training design against its size (cf. thesis Fig. 3.3)")
+    fig.suptitle("Proxy errors on the training design vs its size (cf. thesis Fig. 3.3)", fontsize=11)
     return _save(fig, path)
 
 
