@@ -81,3 +81,6 @@ def test_bad_input():
         fit_pce(z[:-1], y)
     with pytest.raises(ParameterError, match="unit box"):
         fit_pce(z * 3, y)
+    d = z.shape[1]
+    with pytest.raises(ParameterError, match=rf"N = {d + 1} <= d \+ 1 = {d + 1} leaves no leave-one-out error"):
+        fit_pce(z[: d + 1], y[: d + 1], solver="ols")

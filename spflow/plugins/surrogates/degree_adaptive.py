@@ -107,6 +107,10 @@ def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], so
         raise ParameterError(f"fit_pce: solver must be one of {SOLVERS}, got {solver!r}")
     if target_loo is not None and not target_loo >= 0.0:
         raise ParameterError(f"fit_pce: target_loo must be >= 0 or None, got {target_loo!r}")
+    if solver == "ols" and z.shape[0] <= z.shape[1] + 1:
+        raise ParameterError(f"fit_pce: least squares (solver 'ols') needs more training runs than the degree-1 basis "
+                             f"has terms: N = {z.shape[0]} <= d + 1 = {z.shape[1] + 1} leaves no leave-one-out error; "
+                             f"add runs or use solver 'lars'")
 
 
 def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = 5, q: float | Sequence[float] = 0.9,
