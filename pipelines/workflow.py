@@ -8,7 +8,9 @@
    Fig. 3.3).
 4. ``bc.*``: chapter 4 -- Table 4.1 design -> PCE -> MCMC -> posterior predictive on BCF1-3 (Apps. B-E, Figs.
    4.4-4.5; ``pipelines/bayesian_calibration.py``).
-5. ``gap.*``: where the calibrated model misses the data and which unmodelled effect explains it
+5. ``slug.*``: slug sizes designed under the posterior with EEIHV, oil price drifting up and down (Figs. 4.6-4.10;
+   ``pipelines/slug_design.py``).
+6. ``gap.*``: where the calibrated model misses the data and which unmodelled effect explains it
    (``pipelines/gap_diagnosis.py``).
 
 Nodes shared by several parts (the bundled observations, for one) are computed once; a part already run on its own
@@ -31,6 +33,7 @@ import bayesian_calibration  # noqa: E402
 import gap_diagnosis  # noqa: E402
 import history_matching  # noqa: E402
 import screening  # noqa: E402
+import slug_design  # noqa: E402
 
 
 def proxy_check(p: spflow.Pipeline, samples: int = 100, cells: int = 100, seed: int = 7) -> None:
@@ -57,6 +60,7 @@ def pipeline(quick: bool = False) -> spflow.Pipeline:
     p.include(history_matching.pipeline(quick=quick), "hm")
     proxy_check(p, **({"samples": 40, "cells": 40} if quick else {}))
     p.include(bayesian_calibration.pipeline(quick=quick), "bc")
+    slug_design.add_design_nodes(p, "bc.posterior", prefix="slug.", quick=quick)
     p.include(gap_diagnosis.pipeline(quick=quick), "gap")
     return p
 
@@ -90,7 +94,7 @@ def report(result: spflow.RunResult, outdir: Path) -> dict[str, list[str]]:
     """One section per part (sub-directories of ``outdir``), each written by that part's own report."""
     sections = {}
     for prefix, module in (("screening", screening), ("hm", history_matching), ("bc", bayesian_calibration),
-                           ("gap", gap_diagnosis)):
+                           ("slug", slug_design), ("gap", gap_diagnosis)):
         sub = outdir / module.__name__
         sub.mkdir(parents=True, exist_ok=True)
         sections[module.__name__] = module.report(result.scoped(prefix), sub)
@@ -100,4 +104,4 @@ def report(result: spflow.RunResult, outdir: Path) -> dict[str, list[str]]:
     return dict(sorted(sections.items(), key=lambda kv: _ORDER.index(kv[0])))
 
 
-_ORDER = ["screening", "history_matching", "proxy_validation", "bayesian_calibration", "gap_diagnosis"]
+_ORDER = ["screening", "history_matching", "proxy_validation", "bayesian_calibration", "slug_design", "gap_diagnosis"]

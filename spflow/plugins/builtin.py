@@ -22,6 +22,7 @@ def spflow_register_stages(register):
     from spflow.plugins.lab.priors import Priors
     from spflow.plugins.observations import Observations
     from spflow.plugins.screening.morris_screening import MorrisScreening
+    from spflow.plugins.slug_design.stage import SlugDesign
     from spflow.plugins.screening.selected_space import SelectedSpace
     from spflow.plugins.screening.sobol_screening import SobolScreening
     from spflow.plugins.statistics.quantiles import Quantiles
@@ -34,7 +35,7 @@ def spflow_register_stages(register):
                   SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation,
                   PCKStage, GPStage, NSGA2Calibration, ParetoDesign, EmceeSampler, MHSampler, PosteriorPredictive,
                   Diagnose, FitPolymerRheology, FitPolymerCoreflood, FitAdsorption, FitTracer, FitPhaseBehaviour,
-                  FitIFT, FitMEViscosity, FitDesaturation, Priors):
+                  FitIFT, FitMEViscosity, FitDesaturation, Priors, SlugDesign):
         register(stage)
 
 
