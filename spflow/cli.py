@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import inspect
+import json
 import runpy
 import sys
 from pathlib import Path
@@ -28,6 +29,7 @@ from typing import Any
 
 from spflow.core.errors import SpflowError
 from spflow.core.executor import BACKENDS, run, status
+from spflow.core.hashing import canonical_hash
 from spflow.core.html_report import provenance_rows, sections_from, write_html_report
 from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry
@@ -64,18 +66,40 @@ def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) ->
     return obj
 
 
-def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argparse.Namespace) -> None:
-    """Call the module's ``report`` (if any), print its lines and write ``report.html`` next to its figures."""
+def _report_fingerprint(namespace: dict[str, Any], result) -> str:
+    """What a report depends on: every node's key and the pipeline modules' sources (the file and its siblings)."""
+    sources = {}
+    module_file = namespace.get("__file__")
+    if module_file:
+        for path in sorted(Path(module_file).resolve().parent.glob("*.py")):
+            sources[path.name] = path.read_text()
+    return canonical_hash({"keys": dict(result.keys), "sources": sources})
+
+
+def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argparse.Namespace,
+                  reuse: bool = False) -> None:
+    """Call the module's ``report`` (if any), print its lines and write ``report.html`` next to its figures.
+
+    With ``reuse`` (``spflow run`` when nothing executed), a report written for the same node keys and pipeline
+    sources is kept and its lines reprinted instead of redrawing every figure."""
     report = namespace.get("report")
     outdir = Path(args.out or Path("out") / pipe.name)
     outdir.mkdir(parents=True, exist_ok=True)
+    fingerprint = _report_fingerprint(namespace, result)
+    stamp, saved, html = outdir / ".report_key", outdir / ".report_lines.json", outdir / "report.html"
+    if reuse and html.is_file() and saved.is_file() and stamp.is_file() and stamp.read_text() == fingerprint:
+        for line in _flat(json.loads(saved.read_text())):
+            print(line)
+        print(f"report (unchanged, all nodes cached): {html.resolve()}")
+        return
     lines = None
     if report is not None:
         lines = report(result, outdir, quick=True) if args.quick and _accepts_quick(report) else report(result, outdir)
         for line in _flat(lines):
             print(line)
-    html = write_html_report(outdir / "report.html", f"spflow report: {pipe.name}", sections_from(outdir, lines),
-                             provenance_rows(result))
+    write_html_report(html, f"spflow report: {pipe.name}", sections_from(outdir, lines), provenance_rows(result))
+    saved.write_text(json.dumps(lines))
+    stamp.write_text(fingerprint)
     print(f"report: {html.resolve()}")
 
 
@@ -93,7 +117,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                  until=args.until, only=args.only, force=args.force or (), verbose=True)
     print(f"{pipe.name}: {len(result.executed)} node(s) executed, {len(result.cached)} from cache")
     if not (args.until or args.only):
-        _write_report(namespace, pipe, result, args)
+        _write_report(namespace, pipe, result, args, reuse=not result.executed)
     return 0
 
 

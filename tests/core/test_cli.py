@@ -115,3 +115,18 @@ def test_quick_profile_and_html_report(workdir, capsys):
     assert (workdir / "out" / "quicktest_quick" / "report.html").is_file()
     assert main(["run", "clitest", "--quick"]) == 2
     assert "pipeline 'clitest' has no quick profile" in capsys.readouterr().err
+
+
+def test_cached_rerun_keeps_an_up_to_date_report(workdir, capsys):
+    (workdir / "pipelines" / "quicktest.py").write_text(QUICK_PIPELINE)
+    assert main(["run", "quicktest"]) == 0
+    figure = workdir / "out" / "quicktest" / "fig_3_2_ramp.png"
+    figure.unlink()  # a redrawn report would write it again
+    capsys.readouterr()
+    assert main(["run", "quicktest"]) == 0
+    out = capsys.readouterr().out
+    assert "n = 7" in out and "report (unchanged, all nodes cached)" in out and not figure.exists()
+    # an edited pipeline module (same node keys) invalidates the saved report
+    (workdir / "pipelines" / "quicktest.py").write_text(QUICK_PIPELINE + "\n# edited\n")
+    assert main(["run", "quicktest"]) == 0
+    assert "report (unchanged" not in capsys.readouterr().out and figure.exists()
