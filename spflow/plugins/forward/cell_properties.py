@@ -277,6 +277,36 @@ def _relative_permeabilities(pr, n):
 
 
 @njit(cache=True, error_model="numpy")
+def species_dispersion(pr, i, k0, k1, k2):
+    """Dispersion coefficients of the carried species of cell ``i`` from the phase coefficients ``k_l``
+    (Eq. 1.9 per phase, ``phi S_l K_l`` in PV units), summed over the phases that carry each species: water and
+    salts ``(KW)``, surfactant per overall fluid surfactant ``(KS)`` and polymer in its carrier phase ``(KP)``.
+    Reads the saturations, phase compositions and carrier index of ``pr``; also used by the 2-D model with
+    directional ``k_l``."""
+    c11 = pr[L.C1P, i]
+    c13 = pr[L.C1P + 2, i]
+    c22 = pr[L.C2P + 1, i]
+    c31 = pr[L.C3P, i]
+    c32 = pr[L.C3P + 1, i]
+    c33 = pr[L.C3P + 2, i]
+    sat0 = pr[L.S1, i]
+    sat2 = pr[L.S1 + 2, i]
+    pcx = int(pr[L.PCX, i])
+    kw = k0 * c11 + k1 * (1.0 - c22 - c32) + k2 * c13
+    surf = sat0 * c31 + pr[L.S1 + 1, i] * c32 + sat2 * c33
+    if surf > 0.0:
+        ks = (k0 * c31 + k1 * c32 + k2 * c33) / surf
+    elif pcx == 1:
+        ks = k0 / sat0
+    elif pcx == 3:
+        ks = k2 / sat2
+    else:
+        ks = 0.0
+    kp = k0 if pcx == 1 else (k2 if pcx == 3 else 0.0)
+    return kw, ks, kp
+
+
+@njit(cache=True, error_model="numpy")
 def _mobilities(st, pr, prm, n):
     """Pass 3 (steps 5 and 7): polymer and phase viscosities, mobilities, fractional flows, the wave-speed bound,
     phase velocities, dispersion coefficients and the capillary pressure; updates the lagged FPC and GRADK.
@@ -293,10 +323,8 @@ def _mobilities(st, pr, prm, n):
         c11 = pr[L.C1P, i]
         c13 = pr[L.C1P + 2, i]
         c21 = pr[L.C2P, i]
-        c22 = pr[L.C2P + 1, i]
         c23 = pr[L.C2P + 2, i]
         c31 = pr[L.C3P, i]
-        c32 = pr[L.C3P + 1, i]
         c33 = pr[L.C3P + 2, i]
         kr_a = pr[L.KR, i]
         kr_o = pr[L.KR + 1, i]
@@ -365,17 +393,7 @@ def _mobilities(st, pr, prm, n):
         k0 = prm[K.ALPHA_D] * f0 + dm * sat0
         k1 = prm[K.ALPHA_D + 1] * f1 + dm * sat1
         k2 = prm[K.ALPHA_D + 2] * f2 + dm * sat2
-        pr[L.KW, i] = k0 * c11 + k1 * (1.0 - c22 - c32) + k2 * c13
-        surf = sat0 * c31 + sat1 * c32 + sat2 * c33
-        if surf > 0.0:
-            pr[L.KS, i] = (k0 * c31 + k1 * c32 + k2 * c33) / surf
-        elif pcx == 1:
-            pr[L.KS, i] = k0 / sat0
-        elif pcx == 3:
-            pr[L.KS, i] = k2 / sat2
-        else:
-            pr[L.KS, i] = 0.0
-        pr[L.KP, i] = k0 if pcx == 1 else (k2 if pcx == 3 else 0.0)
+        pr[L.KW, i], pr[L.KS, i], pr[L.KP, i] = species_dispersion(pr, i, k0, k1, k2)
 
         # capillary pressure between the carrier (wetting) phase and the oleic phase (Eq. 1.8, IFT-scaled)
         pr[L.PCAP, i] = 0.0

@@ -102,6 +102,59 @@ def _record_profile(st, pr, prm, n, prof, kp, press):
 
 
 @njit(cache=True, error_model="numpy")
+def first_negative(new, st, n):
+    """First cell whose updated water, oil, anions, divalent cations or fluid (non-adsorbed) surfactant or polymer
+    ``new[6, n]`` is negative beyond ``NEG_TOL`` (``st`` holds the adsorbed amounts), or -1."""
+    for i in range(n):
+        if (new[L.M1, i] < -NEG_TOL or new[L.M2, i] < -NEG_TOL or new[L.M3, i] - st[L.A3, i] < -NEG_TOL
+                or new[L.M4, i] - st[L.A4, i] < -NEG_TOL or new[L.M5, i] < -NEG_TOL
+                or new[L.M6, i] < -NEG_TOL):
+            return i
+    return -1
+
+
+@njit(cache=True, error_model="numpy")
+def polymer_storage(st, new, pr, e4, n, d_stor):
+    """Polymer storage after advection: ``EPHI4`` x carrier saturation, scaled with the water volume change."""
+    for i in range(n):
+        m1_old = st[L.M1, i]
+        ratio = new[L.M1, i] / m1_old if m1_old > 0.0 else 1.0
+        d_stor[D_POLY, i] = e4 * pr[L.SPC, i] * max(ratio, 0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def dispersion_inputs(st, pr, e3, n, d_stor, d_conc, d_coef):
+    """Storage, concentration and cell coefficient of the dispersed species (rows ``D_*``) of every cell; the
+    polymer storage row is set by ``polymer_storage``."""
+    for i in range(n):
+        # anions and divalent cations per water volume (storage: water volume)
+        m1 = st[L.M1, i]
+        d_stor[D_ANION, i] = max(m1, 0.0)
+        d_stor[D_DIVALENT, i] = d_stor[D_ANION, i]
+        d_conc[D_ANION, i] = st[L.M5, i] / m1 if m1 > 0.0 else 0.0
+        d_conc[D_DIVALENT, i] = st[L.M6, i] / m1 if m1 > 0.0 else 0.0
+        # surfactant: overall accessible concentration, storage EPHI3
+        d_conc[D_SURF, i] = max(st[L.M3, i] - st[L.A3, i], 0.0) / e3
+        # polymer in its carrier phase
+        s_p = d_stor[D_POLY, i]
+        d_conc[D_POLY, i] = max(st[L.M4, i] - st[L.A4, i], 0.0) / s_p if s_p > 0.0 else 0.0
+        d_coef[D_ANION, i] = pr[L.KW, i]
+        d_coef[D_DIVALENT, i] = pr[L.KW, i]
+        d_coef[D_SURF, i] = pr[L.KS, i]
+        d_coef[D_POLY, i] = pr[L.KP, i]
+
+
+@njit(cache=True, error_model="numpy")
+def apply_dispersion(st, n, lamd, jd):
+    """Conservative update of the dispersed species with the face fluxes ``jd`` of ``transport.solve_dispersion``."""
+    for i in range(n):
+        st[L.M5, i] -= lamd * (jd[D_ANION, i + 1] - jd[D_ANION, i])
+        st[L.M6, i] -= lamd * (jd[D_DIVALENT, i + 1] - jd[D_DIVALENT, i])
+        st[L.M3, i] -= lamd * (jd[D_SURF, i + 1] - jd[D_SURF, i])
+        st[L.M4, i] -= lamd * (jd[D_POLY, i + 1] - jd[D_POLY, i])
+
+
+@njit(cache=True, error_model="numpy")
 def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
@@ -222,13 +275,7 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
             for r in range(6):
                 for i in range(n):
                     new[r, i] = st[r, i] - lam * (flux[r, i + 1] - flux[r, i])
-            bad = -1
-            for i in range(n):
-                if (new[L.M1, i] < -NEG_TOL or new[L.M2, i] < -NEG_TOL or new[L.M3, i] - st[L.A3, i] < -NEG_TOL
-                        or new[L.M4, i] - st[L.A4, i] < -NEG_TOL or new[L.M5, i] < -NEG_TOL
-                        or new[L.M6, i] < -NEG_TOL):
-                    bad = i
-                    break
+            bad = first_negative(new, st, n)
             if bad < 0:
                 break
             dt *= 0.5
@@ -239,39 +286,15 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
             break
 
         # polymer storage after advection: EPHI4 x carrier saturation, scaled with the water volume
-        e4 = prm[K.EPHI4]
-        for i in range(n):
-            m1_old = st[L.M1, i]
-            ratio = new[L.M1, i] / m1_old if m1_old > 0.0 else 1.0
-            d_stor[D_POLY, i] = e4 * pr[L.SPC, i] * max(ratio, 0.0)
+        polymer_storage(st, new, pr, prm[K.EPHI4], n, d_stor)
         st[:6] = new
 
         # ---- dispersion (backward Euler, conservative)
         if dispersion:
             lamd = dt / (dx * dx)
-            e3 = prm[K.EPHI3]
-            for i in range(n):
-                # anions and divalent cations per water volume (storage: water volume)
-                m1 = st[L.M1, i]
-                d_stor[D_ANION, i] = max(m1, 0.0)
-                d_stor[D_DIVALENT, i] = d_stor[D_ANION, i]
-                d_conc[D_ANION, i] = st[L.M5, i] / m1 if m1 > 0.0 else 0.0
-                d_conc[D_DIVALENT, i] = st[L.M6, i] / m1 if m1 > 0.0 else 0.0
-                # surfactant: overall accessible concentration, storage EPHI3
-                d_conc[D_SURF, i] = max(st[L.M3, i] - st[L.A3, i], 0.0) / e3
-                # polymer in its carrier phase
-                s_p = d_stor[D_POLY, i]
-                d_conc[D_POLY, i] = max(st[L.M4, i] - st[L.A4, i], 0.0) / s_p if s_p > 0.0 else 0.0
-                d_coef[D_ANION, i] = pr[L.KW, i]
-                d_coef[D_DIVALENT, i] = pr[L.KW, i]
-                d_coef[D_SURF, i] = pr[L.KS, i]
-                d_coef[D_POLY, i] = pr[L.KP, i]
+            dispersion_inputs(st, pr, prm[K.EPHI3], n, d_stor, d_conc, d_coef)
             T.solve_dispersion(d_stor, d_conc, d_coef, n, lamd, work_c, work_d, jd)
-            for i in range(n):
-                st[L.M5, i] -= lamd * (jd[D_ANION, i + 1] - jd[D_ANION, i])
-                st[L.M6, i] -= lamd * (jd[D_DIVALENT, i + 1] - jd[D_DIVALENT, i])
-                st[L.M3, i] -= lamd * (jd[D_SURF, i + 1] - jd[D_SURF, i])
-                st[L.M4, i] -= lamd * (jd[D_POLY, i + 1] - jd[D_POLY, i])
+            apply_dispersion(st, n, lamd, jd)
 
         # ---- bookkeeping
         pcx = int(pr[L.PCX, n - 1])

@@ -40,7 +40,9 @@ def invalidate_stale_cache() -> bool:
             return False
     except OSError:
         pass
-    for folder in (_ROOT / "__pycache__", _ROOT / "physics" / "__pycache__"):
+    # two_d's compiled functions call the 1-D helpers, so their cache goes stale with them (each two_d file's own
+    # edits are tracked by numba: they call nothing else of two_d that is compiled)
+    for folder in (_ROOT / "__pycache__", _ROOT / "physics" / "__pycache__", _ROOT / "two_d" / "__pycache__"):
         for pattern in ("*.nbi", "*.nbc"):
             for path in folder.glob(pattern):
                 path.unlink(missing_ok=True)

@@ -52,11 +52,16 @@ def common_grid(totals, pv_step: float) -> tuple[np.ndarray, list[np.ndarray]]:
     return union, [np.searchsorted(union, g) for g in grids]
 
 
-def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl):
-    sched = as_schedule(schedule)
-    total = sched.total_pv
+def _check_cells(cells):
     if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or not 3 <= cells <= _MAX_CELLS:
         raise ParameterError(f"cells must be an integer in [3, {_MAX_CELLS}], got {cells!r}")
+    return int(cells)
+
+
+def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl, check_cells=_check_cells):
+    sched = as_schedule(schedule)
+    total = sched.total_pv
+    cells = check_cells(cells)
     if scheme not in _SCHEMES:
         raise ParameterError(f"scheme must be one of {sorted(_SCHEMES)}, got {scheme!r}")
     pv_step = check_number("pv_step", pv_step, 0.0, total, lower_open=True)
@@ -80,11 +85,11 @@ def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cf
         effect = registry[name]
         if name not in E.BUILTIN_NAMES and effect.transform_params is not None:
             resolved = resolve_params(effect.transform_params(dict(resolved), s))
-    return sched, resolved, strengths, registry, int(cells), pv_step, prof, cfl
+    return sched, resolved, strengths, registry, cells, pv_step, prof, cfl
 
 
 def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv_step=0.01, profiles_at=None,
-             cfl=0.5):
+             cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None):
     """Run one SP coreflood and return an ``xarray.Dataset``.
 
     Parameters
@@ -95,7 +100,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     params:
         UTCHEM-named parameters overriding the defaults (``spflow list params``; ``parameters.PARAMETERS``).
     cells:
-        number of grid cells along the core (3 ... 20000).
+        number of grid cells along the core (3 ... 20000); a pair ``(nx, ny)`` runs the 2-D model
+        (``two_d.simulate2d``, thesis sec. 1.8), as does giving one of its arguments ``permeability`` (mD, shape
+        ``(ny, nx)``), ``alpha_t_ratio`` (transverse/longitudinal dispersivity) or ``pressure_every``.
     effects:
         ``{effect name: strength}`` overriding the default strengths (``effects.BUILTIN_EFFECTS`` and plugins).
     scheme:
@@ -125,6 +132,12 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ------
     ValueError (``ParameterError``) for invalid input, before any work; ``SimulationError`` if the run fails.
     """
+    two_d = {"permeability": permeability, "alpha_t_ratio": alpha_t_ratio, "pressure_every": pressure_every}
+    if isinstance(cells, (tuple, list)) or any(v is not None for v in two_d.values()):
+        from .two_d.simulate2d import simulate2d
+
+        return simulate2d(schedule, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
+                          profiles_at=profiles_at, cfl=cfl, **two_d)
     sched, resolved, strengths, registry, cells, pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
