@@ -65,6 +65,8 @@ def test_every_evaluation_matches_an_independent_npv_and_pressure_drop():
     assert bool(out["on_front"].values[int(out["knee_index"])])
     np.testing.assert_array_equal(out["knee_design"].values, out["design"].values[int(out["knee_index"])])
     assert out.sizes["knee_draw"] == 1 and out["knee_dp"].attrs["units"] == "kPa"
+    # the hypervolume reference: default NPV 0 M$ and 50 kPa, in the minimised objectives (-NPV, max dp)
+    assert out["reference"].values.tolist() == [0.0, 50.0]
 
 
 def posterior_of(values: np.ndarray, names: list[str]) -> xr.Dataset:
@@ -104,6 +106,12 @@ def test_posterior_draws_drive_the_simulations():
 def test_bad_parameters_are_named_before_any_work(params, field):
     with pytest.raises(ParameterError, match=field):
         SlugDesign(**params).realisations(None)
+
+
+@pytest.mark.parametrize("reference", [[1.0], [0.0, float("nan")], [0.0, "x"]])
+def test_bad_reference_fails_when_the_stage_is_built(reference):
+    with pytest.raises(ParameterError, match="parameter 'reference'"):
+        SlugDesign(reference=reference)
 
 
 def test_posterior_with_unknown_parameter_is_rejected_before_any_simulation():

@@ -95,6 +95,9 @@ class SlugDesign(Stage):
         "pv_step": Param(float, 0.01, bounds=(1e-4, 0.1), unit="PV", doc="simulator output spacing"),
         "fixed": Param(dict, {}, doc="simulator parameter overrides (UTCHEM names) applied to every run"),
         "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="random seed (LHS, GP restarts, draws, price paths)"),
+        "reference": Param(list, [0.0, 50.0],
+                           doc="hypervolume reference [E[NPV] M$, E[max dp] kPa]: designs losing money or above "
+                               "the pressure limit add nothing; [] = the adaptive rule of docs/eeihv.md"),
     }
 
     @classmethod
@@ -121,14 +124,29 @@ class SlugDesign(Stage):
             return Realisations(problem)
         return Realisations(problem, flat_theta(posterior), [str(n) for n in posterior["param"].values])
 
+    def __init__(self, **params):
+        super().__init__(**params)
+        self._reference()  # a malformed reference fails when the pipeline is planned, before any work
+
+    def _reference(self) -> np.ndarray | None:
+        """The reference point in the minimised objectives (-NPV, max dp), or None for the adaptive rule."""
+        ref = self.params["reference"]
+        if not ref:
+            return None
+        if len(ref) != 2 or not all(isinstance(v, (int, float)) and np.isfinite(v) for v in ref):
+            raise ParameterError(f"stage 'slug_design' parameter 'reference' must be [] or [NPV in M$, max dp in "
+                                 f"kPa] (two finite numbers), got {ref!r}")
+        return np.array([-float(ref[0]), float(ref[1])])
+
     def run(self, ctx: StageContext, posterior: xr.Dataset | None = None) -> xr.Dataset:
         p = self.params
+        reference = self._reference()
         draws = self.realisations(posterior)
         parallel = ctx.parallel()
         objective = NoisyObjective(draws, parallel, seed=p["seed"])
         snapshots: dict[int, BGOResult] = {}
         result = run_bgo(objective, design_bounds(), n_init=p["n_init"], max_iter=p["max_iter"], rtol=p["rtol"],
-                         min_iter=p["min_iter"], batch=p["batch"], seed=p["seed"],
+                         min_iter=p["min_iter"], batch=p["batch"], seed=p["seed"], reference=reference,
                          callback=_snapshot_recorder(set(p["snapshots"]), snapshots))
         out = result.to_dataset(design_names=DESIGN_VARIABLES, design_units=("PV",) * 3,
                                 objective_names=OBJECTIVES, objective_units=OBJECTIVE_UNITS)
