@@ -12,8 +12,8 @@
 PIPELINE is a path to a Python file, a name in ``./pipelines/`` (``demo`` -> ``pipelines/demo.py``) or a dotted
 module; the module defines ``pipeline`` (a Pipeline or a function returning one) and optionally
 ``report(result, outdir)``, called after a successful run; ``report.html`` (:mod:`spflow.core.html_report`) is
-written next to the figures it makes. ``--quick`` passes ``quick=True`` to ``pipeline`` (and ``report``) when they
-take it: the pipeline's small-budget profile.
+written next to the figures it makes. ``--quick`` passes ``quick=True`` to ``pipeline`` when it takes it: the
+pipeline's small-budget profile.
 """
 
 from __future__ import annotations
@@ -51,13 +51,9 @@ def load_pipeline_module(spec: str) -> dict[str, Any]:
         raise SpflowError(f"pipeline {spec!r} not found: not a .py file, not pipelines/{spec}.py, not a module") from None
 
 
-def _accepts_quick(func) -> bool:
-    return "quick" in inspect.signature(func).parameters
-
-
 def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) -> Pipeline:
     obj = namespace.get("pipeline")
-    if quick and not (callable(obj) and not isinstance(obj, Pipeline) and _accepts_quick(obj)):
+    if quick and not (callable(obj) and not isinstance(obj, Pipeline) and "quick" in inspect.signature(obj).parameters):
         raise SpflowError(f"pipeline {spec!r} has no quick profile (its pipeline() takes no 'quick' argument)")
     if callable(obj) and not isinstance(obj, Pipeline):
         obj = obj(quick=True) if quick else obj()
@@ -94,7 +90,7 @@ def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argpa
         return
     lines = None
     if report is not None:
-        lines = report(result, outdir, quick=True) if args.quick and _accepts_quick(report) else report(result, outdir)
+        lines = report(result, outdir)
         for line in _flat(lines):
             print(line)
     write_html_report(html, f"spflow report: {pipe.name}", sections_from(outdir, lines), provenance_rows(result))
