@@ -97,7 +97,8 @@ class EmceeSampler(SamplerStage):
         rng = np.random.default_rng(seed)
         burn, keep = self._iterations(walkers)
         start = initial_points(model, walkers, p["init"], p["init_draws"], rng)
-        sampler = emcee.EnsembleSampler(walkers, model.ndim, model, moves=_MOVES[p["moves"]](), vectorize=True)
+        sampler = emcee.EnsembleSampler(walkers, model.ndim, model, moves=_MOVES[p["moves"]](), vectorize=True,
+                                        blobs_dtype=float)
         sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
         state = sampler.run_mcmc(start, burn) if burn else start
         sampler.reset()

@@ -33,12 +33,14 @@ import numpy as np
 from numba import njit
 from scipy.special import gammaln
 
-__all__ = ["log_marginal_closed_form", "log_marginal", "log_sigma_prior", "sample_sigma"]
+__all__ = ["log_marginal_closed_form", "log_marginal", "log_marginal_checked", "log_sigma_prior", "sample_sigma"]
 
 #: Trapezoid step in t of the sinh map (absolute accuracy of log p about 1e-6; halving it costs twice as much).
 STEP = 0.2
 #: How far (in units of u = log σ²) the nodes reach on either side of the mode before the tails are negligible.
 REACH = 40.0
+#: ``uniforms`` argument of :func:`_quadrature` when no σ is to be drawn.
+_NO_DRAWS = np.empty(0)
 
 
 def log_marginal_closed_form(sum_sq: np.ndarray, n: int) -> np.ndarray:
@@ -168,11 +170,23 @@ def log_marginal(residuals: np.ndarray, variance: np.ndarray | float = 0.0) -> n
     error variance at the same points. Rows whose variance is all zero use the closed form (exact); the others the
     quadrature.
     """
-    r, v = _check(residuals, variance)
-    out = log_marginal_closed_form(np.sum(r * r, axis=1), r.shape[1])
-    mixed = np.flatnonzero(v.any(axis=1))
-    if mixed.size:
-        out[mixed] = _quadrature(r[mixed] ** 2, v[mixed], np.empty(0), STEP, _reach(r.shape[1]))[0]
+    return log_marginal_checked(*_check(residuals, variance))
+
+
+def log_marginal_checked(r: np.ndarray, v: np.ndarray | None) -> np.ndarray:
+    """:func:`log_marginal` without input validation, for a caller that guarantees float arrays ``r`` (W, n) and
+    ``v`` (W, n) C-contiguous with ``v >= 0`` — or ``v = None`` for v ≡ 0 (closed form, no test of v). The MCMC hot
+    path (:class:`~.likelihood.PosteriorModel`) validates its shapes once and clips the surrogate's variance."""
+    r2 = r * r
+    if v is None:
+        return log_marginal_closed_form(np.sum(r2, axis=1), r.shape[1])
+    mixed = v.any(axis=1)
+    if mixed.all():  # the usual case with a surrogate error: no closed form to compute and overwrite
+        return _quadrature(r2, v, _NO_DRAWS, STEP, _reach(r.shape[1]))[0]
+    out = log_marginal_closed_form(np.sum(r2, axis=1), r.shape[1])
+    if mixed.any():
+        rows = np.flatnonzero(mixed)
+        out[rows] = _quadrature(r2[rows], v[rows], _NO_DRAWS, STEP, _reach(r.shape[1]))[0]
     return out
 
 

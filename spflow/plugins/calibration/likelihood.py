@@ -14,7 +14,10 @@ variance) adds to the measurement variance point by point, d_k ~ N(f_k(θ), σ_i
 :mod:`.jeffreys`.
 
 Everything is vectorised over rows of parameter vectors (emcee walkers, independent MH chains): one surrogate call per
-batch, only for the rows inside the box.
+batch, only for the rows inside the box. It is the MCMC hot path (10^5 calls of one row per MH chain), so shapes are
+checked once at construction, each block's prediction columns are a precomputed slice where consecutive, the
+surrogate variance is clipped once per call, and blocks whose variance is identically zero (``surrogate_variance``
+off, or rows with v ≡ 0) use the closed form without building a zero array.
 """
 
 from __future__ import annotations
@@ -61,8 +64,18 @@ class PosteriorModel:
                                      f"got {list(self.sigma)}")
         self.lower = np.asarray(self.lower, dtype=float)
         self.upper = np.asarray(self.upper, dtype=float)
-        self.columns = [self.aligned.blocks[p][0] for p in self.pairs]
-        self.observed = [self.aligned.blocks[p][1] for p in self.pairs]
+        self.columns = [np.asarray(self.aligned.blocks[p][0], dtype=np.intp) for p in self.pairs]
+        self.observed = [np.asarray(self.aligned.blocks[p][1], dtype=float) for p in self.pairs]
+        if self.lower.shape != (len(self.surrogate.names),) or self.upper.shape != self.lower.shape:
+            raise ParameterError(f"prior box: lower and upper need one value per surrogate parameter "
+                                 f"{self.surrogate.names}, got shapes {self.lower.shape} and {self.upper.shape}")
+        for (variable, experiment), cols, obs in zip(self.pairs, self.columns, self.observed):
+            if cols.shape != obs.shape or cols.ndim != 1 or not cols.size:
+                raise ParameterError(f"block {variable}/{experiment}: column numbers {cols.shape} and observations "
+                                     f"{obs.shape} must be equal-length non-empty vectors")
+        # each block's prediction columns once: a slice (a view, no copy per call) where they are consecutive
+        self._take = [slice(int(c[0]), int(c[-1]) + 1) if np.array_equal(c, np.arange(c[0], c[-1] + 1)) else c
+                      for c in self.columns]
         self.log_prior_density = -float(np.sum(np.log(self.upper - self.lower)))
 
     @property
@@ -81,11 +94,12 @@ class PosteriorModel:
         return np.all((theta >= self.lower) & (theta <= self.upper), axis=1)
 
     def _blocks(self, theta: np.ndarray):
-        """Residuals and surrogate variances (rows, n_i) of every block at θ (rows inside the box)."""
+        """Residuals r and surrogate variances v (rows, n_i), v C-contiguous and >= 0, of every block at θ (rows
+        inside the box); v is ``None`` when the surrogate variance is left out (v ≡ 0)."""
         mean, var = self.surrogate.predict(theta)
-        for cols, obs in zip(self.columns, self.observed):
-            v = var[:, cols] if self.surrogate_variance else np.zeros((theta.shape[0], cols.size))
-            yield obs - mean[:, cols], np.clip(v, 0.0, None)
+        var = np.maximum(var, 0.0) if self.surrogate_variance else None
+        for take, obs in zip(self._take, self.observed):
+            yield obs - mean[:, take], None if var is None else np.ascontiguousarray(var[:, take])
 
     def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(log posterior, log likelihood), each (rows,), at coordinates ``x`` (rows, ndim); −inf outside the box."""
@@ -98,16 +112,17 @@ class PosteriorModel:
             return log_post, log_lik
         lik = np.zeros(ok.size)
         prior = np.full(ok.size, self.log_prior_density)
-        for i, (r, v) in enumerate(self._blocks(theta[ok])):
+        for i, (r, v) in enumerate(self._blocks(theta if ok.size == x.shape[0] else theta[ok])):
             if self.noise == "jeffreys_marginal":
-                lik += jeffreys.log_marginal(r, v)
+                lik += jeffreys.log_marginal_checked(r, v)
                 continue
             if self.noise == "known":
                 sigma = np.full(ok.size, self.sigma[i])
             else:
                 sigma = np.exp(x[ok, self.n_theta + i])
-                prior += jeffreys.log_sigma_prior(sigma, v)
-            total = sigma[:, None] ** 2 + v
+                if v is not None:  # the prior in log σ is flat (exactly 0) when v ≡ 0
+                    prior += jeffreys.log_sigma_prior(sigma, v)
+            total = sigma[:, None] ** 2 + (0.0 if v is None else v)
             lik += -0.5 * np.sum(_LOG_2PI + np.log(total) + r * r / total, axis=1)
         log_lik[ok] = lik
         log_post[ok] = lik + prior
@@ -127,10 +142,10 @@ class PosteriorModel:
             return np.tile(np.asarray(self.sigma, dtype=float), (x.shape[0], 1))
         out = np.empty((x.shape[0], len(self.pairs)))
         for i, (r, v) in enumerate(self._blocks(x[:, : self.n_theta])):
-            out[:, i] = jeffreys.sample_sigma(r, v, rng)
+            out[:, i] = jeffreys.sample_sigma(r, 0.0 if v is None else v, rng)
         return out
 
     def initial_log_sigma(self, theta: np.ndarray) -> np.ndarray:
         """Profile values log sqrt(S_i/n_i) at θ (rows, n_blocks): a starting point for sampled noise levels."""
-        return np.column_stack([0.5 * np.log(np.mean(r * r, axis=1) + np.mean(v, axis=1) + 1e-300)
-                                for r, v in self._blocks(theta)])
+        return np.column_stack([0.5 * np.log(np.mean(r * r, axis=1) + (0.0 if v is None else np.mean(v, axis=1))
+                                             + 1e-300) for r, v in self._blocks(theta)])

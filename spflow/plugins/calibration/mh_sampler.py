@@ -82,7 +82,8 @@ class MHSampler(SamplerStage):
         chains = len(seeds)
         width = np.concatenate([model.upper - model.lower, np.ones(model.ndim - model.n_theta)])
         proposal = GaussianProposal(np.tile(np.diag(p["initial_scale"] * width), (chains, 1, 1)))
-        sampler = emcee.EnsembleSampler(chains, model.ndim, model, moves=emcee.moves.MHMove(proposal), vectorize=True)
+        sampler = emcee.EnsembleSampler(chains, model.ndim, model, moves=emcee.moves.MHMove(proposal), vectorize=True,
+                                        blobs_dtype=float)
         sampler.random_state = np.random.RandomState(int(rngs[0].integers(2**32))).get_state()
         state, done, adapted = start, 0, np.zeros(chains, dtype=bool)
         for n in ctx.progress(np.diff(np.r_[0:p["burn"]:p["tune_interval"], p["burn"]]), what="tuning blocks"):
