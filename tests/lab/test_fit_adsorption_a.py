@@ -2,11 +2,13 @@
 
 import numpy as np
 import pytest
+from scipy import stats
+from scipy.optimize import minimize_scalar
 
 from spflow.core.stage import StageContext
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab import adsorption_fit as af
-from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval
+from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval, stated_interval
 from spflow.plugins.lab.lab_figures_a import adsorption_figure
 from spflow.plugins.lab.lab_stages_a import FitAdsorption
 
@@ -42,16 +44,45 @@ def test_noise_free_data_recover_the_truth(component):
 
 
 @pytest.mark.parametrize("component", list(af.COMPONENTS))
-def test_truth_inside_95_percent_interval_over_seeds(component):
+def test_truth_inside_stated_95_percent_interval_over_seeds(component):
+    # the stated interval is the profile-likelihood one; with a correct 95 % interval >= 16/20 holds with prob. 0.997
     truth = _truth(component)
     hits = dict.fromkeys(truth, 0)
     for seed in range(20):
         fit = af.fit_adsorption(af.synthetic_adsorption(component, truth, np.random.default_rng(3000 + seed)),
                                 component)
-        lo, hi = fit_interval(fit, 0.95)
+        assert fit.attrs["stated_interval"] == "profile"
+        lo, hi = stated_interval(fit)
         for name in truth:
             hits[name] += bool(lo.sel(param=name) <= truth[name] <= hi.sel(param=name))
     assert all(h >= 16 for h in hits.values()), hits
+
+
+def test_profile_interval_of_a_slope_clipped_at_its_bound():
+    # bundled surfactant table: AD32 is estimated at its bound 0, so its interval starts there; at the upper end the
+    # RSS minimised over AD31 (closed form: the isotherm is linear in it) and B3D (minimize_scalar) equals the F
+    # threshold -- computed here without least_squares
+    fit = FitAdsorption(component="surfactant").run(CTX)
+    assert float(fit["estimate"].sel(param="AD32")) == pytest.approx(0.0, abs=1e-20)
+    assert float(fit["profile_lower"].sel(param="AD32")) == 0.0
+    conc, cse, c_hat = fit["concentration"].values, fit["cse"].values, fit["c_hat"].values
+    scale = np.max(np.abs(c_hat))
+
+    def profiled(a2):
+        def rss(log_b):
+            g = conc / (1.0 + np.exp(log_b) * conc)
+            a1 = max(0.0, np.sum(g * (c_hat - a2 * cse * g)) / np.sum(g * g))
+            return np.sum(((a1 + a2 * cse) * g - c_hat) ** 2) / scale**2
+        return minimize_scalar(rss, bounds=(np.log(1.0), np.log(1e4)), method="bounded",
+                               options={"xatol": 1e-10}).fun
+
+    dof = fit.attrs["dof"]
+    threshold = fit.attrs["rss"] * (1 + stats.t.ppf(0.975, dof) ** 2 / dof)
+    upper = float(fit["profile_upper"].sel(param="AD32"))
+    assert profiled(upper) == pytest.approx(threshold, rel=1e-6)
+    assert profiled(0.0) == pytest.approx(fit.attrs["rss"], rel=1e-6)
+    lo, hi = fit_interval(fit)
+    assert float(lo.sel(param="AD32")) < 0.0 < upper < float(hi.sel(param="AD32"))  # linearised leaves the bounds
 
 
 def test_salinity_slope_is_recovered_when_present():

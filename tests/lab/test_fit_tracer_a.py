@@ -2,11 +2,14 @@
 
 import numpy as np
 import pytest
+from scipy import stats
+from scipy.optimize import minimize_scalar
+from scipy.stats import binom
 
 from oracles import ogata_banks
 from spflow.core.stage import StageContext
 from spflow.plugins.lab import tracer_fit as tf
-from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval
+from spflow.plugins.lab.fit_result import FIT, FitError, stated_interval
 from spflow.plugins.lab.lab_figures_a import tracer_figure
 from spflow.plugins.lab.lab_stages_a import FitTracer
 
@@ -31,14 +34,50 @@ def test_noise_free_data_recover_the_truth():
     FIT.validate(fit, stage="fit_tracer", port="output")
 
 
-def test_truth_inside_95_percent_interval_over_seeds():
+def test_truth_inside_stated_95_percent_interval_over_seeds():
+    # 40 regenerated data sets; the stated interval is the profile-likelihood one. With a correct 95 % interval the
+    # count inside is < 35 with probability 0.014 (binomial, computed below); an 80 % interval passes with 0.16.
+    # The spread check (scatter of the estimates / mean std) fails intervals too wide or too narrow by ~1.5x.
+    n = 40
+    need = 35
+    assert binom.cdf(need - 1, n, 0.95) < 0.015 and binom.sf(need - 1, n, 0.80) < 0.17
     hits = dict.fromkeys(tf.NAMES, 0)
-    for seed in range(20):
+    est, std = [], []
+    for seed in range(n):
         fit = tf.fit_tracer(*tf.synthetic_tracer(TRUTH, np.random.default_rng(4000 + seed)))
-        lo, hi = fit_interval(fit, 0.95)
+        assert fit.attrs["stated_interval"] == "profile"
+        lo, hi = stated_interval(fit)
         for name in tf.NAMES:
             hits[name] += bool(lo.sel(param=name) <= TRUTH[name] <= hi.sel(param=name))
-    assert all(h >= 16 for h in hits.values()), hits
+        est.append(fit["estimate"].values)
+        std.append(fit["std"].values)
+    assert all(h >= need for h in hits.values()), hits
+    spread = np.std(est, axis=0, ddof=1) / np.mean(std, axis=0)
+    assert np.all((0.65 < spread) & (spread < 1.5)), spread
+
+
+def test_profile_ends_match_brute_force_profile_of_the_dispersivity():
+    # at each end of ALPHAL1's profile interval the RSS minimised over TDS_PER_EC (minimize_scalar, not
+    # least_squares) equals the F threshold RSS_min (1 + t^2/dof)
+    effluent, calibration = tf.synthetic_tracer(TRUTH, np.random.default_rng(7))
+    fit = tf.fit_tracer(effluent, calibration)
+    pv, ec = effluent["pv"].values, effluent["conductivity"].values
+    tds, ec_cal = calibration["tds"].values, calibration["conductivity"].values
+    scale = np.mean(np.abs(ec))
+
+    def profiled(alpha):
+        def rss(a):
+            r = np.concatenate([tf.effluent_conductivity(pv, alpha, a, 0.1524, 9400.0, 17500.0) - ec, tds / a - ec_cal])
+            return np.sum((r / scale) ** 2)
+        return minimize_scalar(rss, bounds=(550.0, 650.0), method="bounded", options={"xatol": 1e-9}).fun
+
+    dof = fit.attrs["dof"]
+    threshold = fit.attrs["rss"] * (1 + stats.t.ppf(0.975, dof) ** 2 / dof)
+    for end in ("profile_lower", "profile_upper"):
+        alpha = float(fit[end].sel(param="ALPHAL1"))
+        assert profiled(alpha) == pytest.approx(threshold, rel=1e-6), end
+    lo, hi = fit["profile_lower"].sel(param="ALPHAL1"), fit["profile_upper"].sel(param="ALPHAL1")
+    assert profiled(float(0.5 * (lo + hi))) < threshold
 
 
 def test_stage_on_bundled_data_and_figure(tmp_path):

@@ -11,7 +11,9 @@ the volume fraction (surfactant). Model: the forward kernels ``C_hat = C a / (1 
 ``a = a1 + a2 C_SE`` (Eq. 2.16 without the permeability factor: static tests are on the rock itself), ``C_SE`` the
 effective salinity the simulator would compute for that brine (``C_SEP`` with BETAP for polymer, ``C_SE`` with
 BETA6 f6 for surfactant). Fitted ``AD41, AD42, B4D`` (polymer) or ``AD31, AD32, B3D`` (surfactant), with absolute
-residuals scaled by the largest retention (batch-test error is roughly constant in mg/g).
+residuals scaled by the largest retention (batch-test error is roughly constant in mg/g). The stated 95 % intervals
+are profile-likelihood intervals (:func:`.fit_result.profile_interval`), which stay inside the bounds: a salinity
+slope estimated at its bound 0 (Table 2.4 truth) gets ``[0, upper]``.
 """
 
 from __future__ import annotations
@@ -117,7 +119,7 @@ def fit_adsorption(data: xr.Dataset, component: str, *, fixed: Mapping[str, floa
         return (isotherm(conc, cse, *t) - c_hat) / scale
 
     fit = fit_least_squares(residuals, x0, names=names, units=[_SPEC[n].unit for n in names], bounds=bounds,
-                            experiment=data.attrs.get("experiment", ""), kind=kind)
+                            experiment=data.attrs.get("experiment", ""), kind=kind, profile=True)
     for v in ("concentration", "salinity", "adsorbed"):
         fit[v] = data[v]
     fit["c_hat"] = ("point", c_hat, {"units": conc_unit})

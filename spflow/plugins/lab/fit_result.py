@@ -8,6 +8,17 @@ approximation at the optimum, ``C = s^2 (J^T J)^-1``, evaluated through the SVD 
   with ``n - p`` degrees of freedom;
 * noise known (``sigma`` given): residuals divided by ``sigma``, ``s^2 = 1``; intervals use the normal distribution.
 
+The linearised interval ``estimate -/+ q std`` is exact only for a model linear in its parameters. With
+``profile=True`` the fit also computes **profile-likelihood intervals** (:func:`profile_interval`): for each parameter
+the set of values where the RSS, minimised over the other parameters inside their bounds, stays below
+``RSS_min (1 + t^2/(n - p))`` (estimated noise, the F(1, n - p) test; ``t`` the Student quantile) or
+``RSS_min + z^2`` (known noise, the chi^2(1) test). For a linear model both equal the linearised interval; for a
+nonlinear one they follow the actual sum of squares, and they end at a parameter bound when the profile is still
+below the threshold there (a Langmuir salinity slope estimated at 0 gets ``[0, upper]`` instead of a linearised
+interval reaching negative values the forward model cannot take). The FIT dataset then carries
+``profile_lower``/``profile_upper`` and attrs ``stated_interval = "profile"``; :func:`stated_interval` returns the
+interval a fit states as its uncertainty.
+
 Parameter names are the forward model's UTCHEM names where one exists (``spflow list params``), so the priors stage
 can map a FIT dataset onto the forward model's parameter space.
 """
@@ -23,7 +34,7 @@ from scipy import optimize, stats
 from spflow.core.errors import SpflowError
 from spflow.core.schema import DatasetSchema, Variable
 
-__all__ = ["FitError", "FIT", "fit_least_squares", "fit_interval"]
+__all__ = ["FitError", "FIT", "fit_least_squares", "fit_interval", "profile_interval", "stated_interval"]
 
 #: Schema of every lab-fit stage output (extra variables on their own dims carry the data and the fitted curves).
 FIT = DatasetSchema(
@@ -33,6 +44,11 @@ FIT = DatasetSchema(
         "std": Variable(("param",), doc="standard error, sqrt of the covariance diagonal"),
         "covariance": Variable(("param", "param_"), doc="Gauss-Newton covariance s^2 (J^T J)^-1"),
         "unit": Variable(("param",), kind="U", doc="unit of each parameter"),
+        "profile_lower": Variable(("param",), required=False, allow_nan=True,
+                                  doc="lower end of the profile-likelihood interval (attrs interval_level; -inf = "
+                                      "not bounded by the data)"),
+        "profile_upper": Variable(("param",), required=False, allow_nan=True,
+                                  doc="upper end of the profile-likelihood interval (+inf = not bounded by the data)"),
     },
     attrs=("n_points", "dof", "rss", "reduced_chi2", "method", "kind", "experiment"),
     doc="lab fit: estimates, standard errors and covariance of sub-model parameters",
@@ -84,6 +100,8 @@ def fit_least_squares(
     sigma=None,
     experiment: str = "",
     kind: str = "",
+    profile: bool = False,
+    level: float = 0.95,
 ) -> xr.Dataset:
     """Fit ``theta`` minimising ``sum(residuals(theta)**2)`` (weighted by ``1/sigma`` when given); a FIT dataset.
 
@@ -92,8 +110,12 @@ def fit_least_squares(
     a positive scalar or one value per residual (known noise standard deviation in the residual's scale).
     Returns ``estimate``, ``std``, ``covariance`` and ``unit`` on dims ``param``/``param_`` with attrs
     ``units_<name>``, ``n_points``, ``dof``, ``rss`` (weighted), ``reduced_chi2 = rss/dof``, ``noise``
-    ("estimated"/"known"), ``method``, ``nfev``, ``kind``, ``experiment``.
+    ("estimated"/"known"), ``method``, ``nfev``, ``kind``, ``experiment``, ``interval_level`` (= ``level``) and
+    ``stated_interval``: "linearised" (``estimate -/+ q std``), or with ``profile=True`` "profile", the
+    profile-likelihood interval of every parameter at ``level`` in ``profile_lower``/``profile_upper``.
     """
+    if not 0.0 < level < 1.0:
+        raise FitError(f"level = {level!r} must be in (0, 1)")
     names = [str(n) for n in names]
     x0 = np.atleast_1d(np.asarray(x0, dtype=float))
     if x0.ndim != 1 or x0.size != len(names):
@@ -130,8 +152,7 @@ def fit_least_squares(
     def weighted(theta):
         return np.asarray(residuals(theta), dtype=float) * weight
 
-    res = optimize.least_squares(weighted, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
-                                 ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=200 * (p + 1))
+    res = _least_squares(weighted, x0, lo, hi)
     if res.status <= 0 or not np.all(np.isfinite(res.fun)):
         raise FitError(f"least-squares fit did not converge: {res.message}")
     dof = n - p
@@ -151,9 +172,86 @@ def fit_least_squares(
     ds.attrs.update(
         n_points=n, dof=dof, rss=rss, reduced_chi2=rss / dof, noise="estimated" if sigma is None else "known",
         method="scipy.optimize.least_squares trf, 3-point Jacobian; covariance s^2 (J^T J)^-1",
-        nfev=int(res.nfev), kind=str(kind), experiment=str(experiment),
+        nfev=int(res.nfev), kind=str(kind), experiment=str(experiment), interval_level=float(level),
+        stated_interval="linearised",
     )
+    if profile:
+        q = _quantile(ds.attrs["noise"], dof, level)
+        threshold = rss * (1.0 + q**2 / dof) if sigma is None else rss + q**2
+        if threshold > rss:
+            ends = np.array([profile_interval(weighted, res.x, j, lo, hi, threshold, step=q * float(ds["std"][j]),
+                                              name=names[j]) for j in range(p)])
+        else:  # exact fit with estimated noise (RSS = 0): zero-width intervals, as std = 0
+            ends = np.column_stack([res.x, res.x])
+        ds["profile_lower"] = ("param", ends[:, 0])
+        ds["profile_upper"] = ("param", ends[:, 1])
+        ds.attrs.update(stated_interval="profile", profile_threshold_rss=float(threshold),
+                        method=ds.attrs["method"] + "; profile-likelihood intervals (least_squares + brentq)")
     return ds
+
+
+def _least_squares(fun, x0, lo, hi):
+    """The one least-squares call of this module (trust-region reflective, 3-point Jacobian, tight tolerances)."""
+    return optimize.least_squares(fun, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
+                                  ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=200 * (len(x0) + 1))
+
+
+def _quantile(noise: str, dof: int, level: float) -> float:
+    """Two-sided ``level`` quantile: normal for known noise, Student's t with ``dof`` when estimated."""
+    tail = 0.5 + 0.5 * level
+    return float(stats.norm.ppf(tail) if noise == "known" else stats.t.ppf(tail, dof))
+
+
+def profile_interval(weighted: Callable[[np.ndarray], np.ndarray], x_hat, j: int, lo, hi, threshold: float, *,
+                     step: float, name: str = "", max_doublings: int = 30) -> tuple[float, float]:
+    """Profile-likelihood interval ``{v : min_{theta_-j} RSS(theta_j = v) <= threshold}`` of parameter ``j``.
+
+    ``weighted`` returns the weighted residuals, ``x_hat`` is the least-squares optimum, ``lo``/``hi`` the bounds.
+    At each trial value the other parameters are re-optimised by :func:`scipy.optimize.least_squares` inside their
+    bounds (warm-started from the nearest value already profiled). Each end is bracketed by stepping outward from
+    the estimate by ``step`` (the linearised half-width), doubling the step, and then located by
+    :func:`scipy.optimize.brentq`; an end whose bound is reached with the profiled RSS still below the threshold
+    is the bound itself, one the data never bound is ``-/+inf``.
+    """
+    x_hat = np.asarray(x_hat, dtype=float)
+    rest = np.arange(x_hat.size) != j
+    starts = {float(x_hat[j]): x_hat[rest]}
+    values: dict[float, float] = {}
+
+    def excess(v: float) -> float:
+        """Profiled RSS at ``theta_j = v`` minus the threshold (memoised: brentq re-evaluates the bracket ends, whose
+        signs must not change with the warm start)."""
+        if v in values:
+            return values[v]
+        if not rest.any():
+            r = weighted(np.array([v]))
+        else:
+            near = min(starts, key=lambda u: abs(u - v))
+            sub = _least_squares(lambda z: weighted(np.insert(z, j, v)), starts[near], lo[rest], hi[rest])
+            starts[v] = sub.x
+            r = sub.fun
+        values[v] = float(r @ r) - threshold
+        return values[v]
+
+    if not excess(float(x_hat[j])) < 0.0:
+        raise FitError(f"profile of {name!r}: the optimum is not below the threshold RSS {threshold!r}")
+    if not (np.isfinite(step) and step > 0.0):
+        raise FitError(f"profile of {name!r}: step {step!r} must be finite and > 0")
+    ends = []
+    for direction, bound in ((-1.0, lo[j]), (1.0, hi[j])):
+        inside, h = float(x_hat[j]), step
+        end = None
+        for _ in range(max_doublings):
+            if inside == bound:
+                end = bound
+                break
+            trial = float(np.clip(x_hat[j] + direction * h, lo[j], hi[j]))
+            if excess(trial) > 0.0:
+                end = optimize.brentq(excess, inside, trial, xtol=1e-9 * step, rtol=1e-10)
+                break
+            inside, h = trial, 2.0 * h
+        ends.append(direction * np.inf if end is None else float(end))
+    return ends[0], ends[1]
 
 
 def fit_interval(fit: xr.Dataset, level: float = 0.95) -> tuple[xr.DataArray, xr.DataArray]:
@@ -164,6 +262,13 @@ def fit_interval(fit: xr.Dataset, level: float = 0.95) -> tuple[xr.DataArray, xr
     """
     if not 0.0 < level < 1.0:
         raise FitError(f"level = {level!r} must be in (0, 1)")
-    tail = 0.5 + 0.5 * level
-    q = stats.norm.ppf(tail) if fit.attrs.get("noise") == "known" else stats.t.ppf(tail, fit.attrs["dof"])
+    q = _quantile(fit.attrs.get("noise"), fit.attrs["dof"], level)
     return fit["estimate"] - q * fit["std"], fit["estimate"] + q * fit["std"]
+
+
+def stated_interval(fit: xr.Dataset) -> tuple[xr.DataArray, xr.DataArray]:
+    """The interval a fit states as its uncertainty (attrs ``stated_interval``, level ``interval_level``): the
+    profile-likelihood interval when the fit computed one for that purpose, otherwise :func:`fit_interval`."""
+    if fit.attrs.get("stated_interval") == "profile":
+        return fit["profile_lower"], fit["profile_upper"]
+    return fit_interval(fit, float(fit.attrs.get("interval_level", 0.95)))
