@@ -5,6 +5,7 @@ import pytest
 import xarray as xr
 
 from spflow.plugins.forward.simulate import simulate
+from spflow.plugins.forward.two_d.simulate2d import simulate2d
 
 WATER = [{"pv": 0.1, "salinity_ppm": 9400.0}]
 
@@ -43,3 +44,10 @@ def test_permeability_needs_a_2d_grid():
 def test_bad_2d_options(kwargs, match):
     with pytest.raises(ValueError, match=match):
         simulate(WATER, cells=(10, 4), **kwargs)
+
+
+def test_bad_pressure_solver():
+    with pytest.raises(ValueError, match=r"pressure_solver must be one of \('pcg', 'direct'\), got 'lu'"):
+        simulate2d(WATER, cells=(10, 4), pressure_solver="lu")
+    with pytest.raises(ValueError, match=r"pressure_solver must be one of \('pcg', 'direct'\), got 'lu'"):
+        simulate(WATER, cells=(10, 4), pressure_solver="lu")  # the public entry point passes it on

@@ -16,12 +16,15 @@ POLYMER_FLOOD = [{"pv": 0.4, "salinity_ppm": 9400.0}, {"pv": 0.5, "salinity_ppm"
 @pytest.mark.parametrize("schedule,ny", [("BCF1", 3), (POLYMER_FLOOD, 5)])
 def test_homogeneous_2d_equals_1d(schedule, ny):
     """Full SP physics (BCF1: surfactant, polymer, salinity gradient, trapping, dispersion) and a polymer flood with
-    adsorption, IPV and R_k: recovery to 1e-12 absolute, the other series to 1e-9 relative, the same steps."""
+    adsorption, IPV and R_k: recovery to 1e-13 absolute (measured 3e-15), the other series to 1e-9 relative (dp:
+    the CG tolerance, measured 3e-11), the same steps."""
     nx = 40
     one = simulate(schedule, cells=nx, pv_step=0.05, profiles_at=[0.6])
     two = simulate(schedule, cells=(nx, ny), pv_step=0.05, profiles_at=[0.6])
     assert two.attrs["n_steps"] == one.attrs["n_steps"]
-    assert np.max(np.abs(two.recovery.values - one.recovery.values)) < 1e-12
+    assert two.attrs["n_pressure_iterations"] > 0  # the default iterative (PCG) pressure solve, not refactored
+    assert two.attrs["n_pressure_factorizations"] < two.attrs["n_pressure_solves"] / 4  # at every solve
+    assert np.max(np.abs(two.recovery.values - one.recovery.values)) < 1e-13
     for name in ("dp", "oil_cut", "c_polymer_out", "c_surfactant_out", "salinity_out"):
         scale = max(float(np.max(np.abs(one[name].values))), 1e-30)
         assert np.max(np.abs(two[name].values - one[name].values)) <= 1e-9 * scale, name

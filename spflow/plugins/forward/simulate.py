@@ -89,7 +89,7 @@ def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cf
 
 
 def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv_step=0.01, profiles_at=None,
-             cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None):
+             cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None, pressure_solver=None):
     """Run one SP coreflood and return an ``xarray.Dataset``.
 
     Parameters
@@ -102,7 +102,8 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     cells:
         number of grid cells along the core (3 ... 20000); a pair ``(nx, ny)`` runs the 2-D model
         (``two_d.simulate2d``, thesis sec. 1.8), as does giving one of its arguments ``permeability`` (mD, shape
-        ``(ny, nx)``), ``alpha_t_ratio`` (transverse/longitudinal dispersivity) or ``pressure_every``.
+        ``(ny, nx)``), ``alpha_t_ratio`` (transverse/longitudinal dispersivity), ``pressure_every`` or
+        ``pressure_solver`` (``"pcg"``, default, or ``"direct"``).
     effects:
         ``{effect name: strength}`` overriding the default strengths (``effects.BUILTIN_EFFECTS`` and plugins).
     scheme:
@@ -132,12 +133,13 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ------
     ValueError (``ParameterError``) for invalid input, before any work; ``SimulationError`` if the run fails.
     """
-    two_d = {"permeability": permeability, "alpha_t_ratio": alpha_t_ratio, "pressure_every": pressure_every}
+    two_d = {"permeability": permeability, "alpha_t_ratio": alpha_t_ratio, "pressure_every": pressure_every,
+             "pressure_solver": pressure_solver}
     if isinstance(cells, (tuple, list)) or any(v is not None for v in two_d.values()):
         from .two_d.simulate2d import simulate2d
 
         return simulate2d(schedule, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
-                          profiles_at=profiles_at, cfl=cfl, **two_d)
+                          profiles_at=profiles_at, cfl=cfl, **{k: v for k, v in two_d.items() if v is not None})
     sched, resolved, strengths, registry, cells, pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )

@@ -3,20 +3,22 @@
 Per step (time in PV, the units of ``grid2d``):
 
 1. local physics of every cell (``cell_properties`` on the flattened grid: the 1-D property passes, cell by cell);
-2. implicit pressure (``pressure2d``: sparse two-point system, ``splu``) and the face velocities -- every step with
-   ``pressure_every = 1`` (IMPES), else every ``pressure_every`` steps and at every landed time (slug ends, output and
-   profile times), the transport in between using the last velocity field (divergence-free, so still conservative);
-   the lagged inputs of the next step's properties are made local: ``k|grad p| = |U| u_ref / lambda_T`` (trapping
-   number) and the carrier flux scaled by ``|U| / sqrt(k / k_ref)`` (the in-situ shear rate
-   ``gamma_c |u_c| / sqrt(k k_r phi S)``);
+2. implicit pressure (``pressure2d``: sparse two-point system, LU-preconditioned CG or ``splu``) and the face
+   velocities -- every step with ``pressure_every = 1`` (IMPES), else every ``pressure_every`` steps and at every
+   landed time (slug ends, output and profile times), the transport in between using the last velocity field
+   (divergence-free, so still conservative); the lagged inputs of the next step's properties are made local:
+   ``k|grad p| = |U| u_ref / lambda_T`` (trapping number) and the carrier flux scaled by ``|U| / sqrt(k / k_ref)``
+   (the in-situ shear rate ``gamma_c |u_c| / sqrt(k k_r phi S)``);
 3. records (series, maps) when the time has landed on an output or profile time;
 4. time step from ``transport2d.stable_step``, shortened to land on slug ends and output times, halved while any
    component would turn negative (``kernel.first_negative``; 60 halvings, then a time-step collapse);
-5. explicit conservative advection (``transport2d``), then the split backward-Euler dispersion (``dispersion2d``).
+5. explicit conservative advection (``transport2d``: TVD along rows and columns), then the split backward-Euler
+   dispersion (``dispersion2d``).
 
-Returns ``(status, info, n_steps, n_pressure_solves, series, maps, totals, pressure)`` with the 1-D kernel's
-conventions (series rows ``kernel.DP ...``, profile rows ``kernel.P_*`` on the flattened grid, ``totals[4, 6]``) and
-the final pressure field.
+Returns ``(status, info, n_steps, solver, series, maps, totals, pressure)`` with the 1-D kernel's conventions
+(series rows ``kernel.DP ...``, profile rows ``kernel.P_*`` on the flattened grid, ``totals[4, 6]``), the
+``PressureSolver`` (its counters ``n_solves``, ``n_factorizations``, ``n_iterations``) and the final pressure
+field.
 """
 
 from __future__ import annotations
@@ -44,9 +46,11 @@ def _localise_lagged(st, field, kappa_flat):
     st[L.FPC] *= speed / np.sqrt(kappa_flat)
 
 
-def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alpha_t_ratio, pressure_every=1):
+def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alpha_t_ratio, pressure_every=1,
+                 pressure_solver="pcg"):
     """Run the 2-D coreflood (arguments as ``kernel.run_kernel`` with the grid instead of the cell count, plus the
-    transverse dispersivity ratio and the pressure frequency); returns the tuple of the module docstring."""
+    transverse dispersivity ratio, the pressure frequency and ``pressure2d`` method); returns the tuple of the module
+    docstring."""
     nx, ny, n = grid.nx, grid.ny, grid.n
     dx, dy = grid.dx, grid.dy
     n_out, n_prof, n_slug = out_pv.shape[0], prof_pv.shape[0], end_pv.shape[0]
@@ -85,14 +89,13 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
     totals[0] = st[:6].sum(axis=1) / n
     ooip = 1.0 - swi
     dispersion = prm[K.ALPHA_D] + prm[K.ALPHA_D + 1] + prm[K.ALPHA_D + 2] + prm[K.DMOL] > 0.0
-    solver = PressureSolver(grid)
+    solver = PressureSolver(grid, pressure_solver)
 
     t = t_last = 0.0
     k_out = k_prof = slug = steps = 0
     dt_s = 0.0
     cum_oil = 0.0
     field = None
-    n_solves = 0
     status = KR._properties(st, pr, prm, n, 0.0, info, t)
     if status == L.OK:
         field = solver.solve(pr[L.LAMT].reshape(ny, nx))
@@ -105,7 +108,6 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
             break
         if since_solve + 1 >= pressure_every or land:
             field = solver.solve(pr[L.LAMT].reshape(ny, nx))
-            n_solves += 1
             since_solve = 0
         else:
             since_solve += 1
@@ -118,7 +120,7 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
             series[KR.RECOVERY, k_out] = cum_oil / ooip if ooip > 0.0 else 0.0
             span = t - t_last
             if k_out == 0 or span <= 0.0:
-                advective_fluxes_2d(pr, nx, ny, ux, vy, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, fx, gy)
+                advective_fluxes_2d(pr, nx, ny, ux, vy, False, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, fx, gy)
                 outlet_rates(pr, fx, ux, nx, ny, nx, rates)
                 total = rates[T.FW] + rates[T.FO] + rates[T.FS]  # the produced volume rate
                 snap = rates / total if total > 0.0 else rates
@@ -163,7 +165,7 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
         # ---- explicit advection, halving the step until no component goes negative
         bad = -1
         for _ in range(KR.MAX_HALVINGS):
-            advective_fluxes_2d(pr, nx, ny, ux, vy, tvd, dt / dx, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug],
+            advective_fluxes_2d(pr, nx, ny, ux, vy, tvd, dt / dx, dt / dy, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug],
                                 inj[1, slug], inj[2, slug], inj[3, slug], fx, gy)
             conservative_update(st, fx, gy, ux, vy, nx, ny, dt, dx, dy, new)
             bad = KR.first_negative(new, st, n)
@@ -200,4 +202,4 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
             status = L.ERR_NONFINITE
 
     totals[3] = st[:6].sum(axis=1) / n
-    return status, info, steps, n_solves, series, maps, totals, field
+    return status, info, steps, solver, series, maps, totals, field

@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 import xarray as xr
+from threadpoolctl import threadpool_limits
 
 from spflow.core.errors import ParameterError
 
@@ -26,6 +27,7 @@ from ..checks import check_number
 from ..simulate import _SCHEMES, _validate, output_grid
 from .grid2d import Grid2D
 from .kernel2d import run_kernel2d
+from .pressure2d import METHODS
 
 __all__ = ["simulate2d", "MAX_CELLS_2D"]
 
@@ -72,20 +74,23 @@ def _check_permeability(permeability, nx, ny):
 
 
 def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, effects=None, scheme="tvd",
-               pv_step=0.01, profiles_at=None, cfl=0.5, alpha_t_ratio=None, pressure_every=None):
+               pv_step=0.01, profiles_at=None, cfl=0.5, alpha_t_ratio=None, pressure_every=None,
+               pressure_solver="pcg"):
     """Run one SP coreflood on a 2-D core and return an ``xarray.Dataset``.
 
     Arguments as ``simulate.simulate`` plus: ``cells = (nx, ny)``; ``permeability`` (mD, shape ``(ny, nx)`` or a
     DataArray on (``y``, ``x``) such as ``permeability_field(nx, ny)``; None: uniform ``PERM``); ``alpha_t_ratio``
     the transverse/longitudinal dispersivity ratio (default 0.1); ``pressure_every`` (default 1: IMPES) solves the
-    pressure every that many steps and at every slug end, output and profile time (``kernel2d``). Capillary
-    pressure is not available in 2-D.
+    pressure every that many steps and at every slug end, output and profile time (``kernel2d``);
+    ``pressure_solver`` ``"pcg"`` (default: CG preconditioned with a reused LU, flux-corrected to divergence-free)
+    or ``"direct"`` (LU every solve), see ``pressure2d``. Capillary pressure is not available in 2-D.
 
     Returns the 1-D series on ``pv`` (``dp`` injector-well minus producer pressure, ``oil_cut``, ``recovery``,
     effluent concentrations: rate-weighted over the producer line); with ``profiles_at`` the maps of the 1-D
     profiles on (``profile_pv``, ``y``, ``x``); ``permeability`` on (``y``, ``x``); attrs as in 1-D (per-component
     relative mass-balance error, ``n_steps``, ``wall_time_s``) plus ``nx``, ``ny``, ``aspect``, ``alpha_t_ratio``,
-    ``pressure_every``, ``n_pressure_solves``.
+    ``pressure_every``, ``pressure_solver``, ``n_pressure_solves``, ``n_pressure_factorizations``,
+    ``n_pressure_iterations`` (PCG), ``pressure_time_s`` (wall time in the pressure solves).
     """
     sched, resolved, strengths, registry, (nx, ny), pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl, check_cells=_check_cells_2d
@@ -96,6 +101,8 @@ def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, eff
     elif isinstance(pressure_every, bool) or not isinstance(pressure_every, (int, np.integer)) or not (
             1 <= pressure_every <= 1000):
         raise ParameterError(f"pressure_every must be an integer in [1, 1000], got {pressure_every!r}")
+    if pressure_solver not in METHODS:
+        raise ParameterError(f"pressure_solver must be one of {METHODS}, got {pressure_solver!r}")
     perm = np.full((ny, nx), resolved["PERM"]) if permeability is None else _check_permeability(permeability, nx, ny)
     prm = build_kernel_params(resolved, strengths)
     if prm[K.PC0] > 0.0:
@@ -110,9 +117,11 @@ def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, eff
     grid = Grid2D(nx, ny, aspect, perm / resolved["PERM"])
 
     start = time.perf_counter()
-    status, info, n_steps, n_solves, series, maps, totals, _ = run_kernel2d(
-        prm, end_pv, inj, out_pv, prof, grid, _SCHEMES[scheme], cfl, alpha_t_ratio, int(pressure_every)
-    )
+    with threadpool_limits(1, "blas"):  # the PCG's vector operations are too small for threaded BLAS (pressure2d)
+        status, info, n_steps, solver, series, maps, totals, _ = run_kernel2d(
+            prm, end_pv, inj, out_pv, prof, grid, _SCHEMES[scheme], cfl, alpha_t_ratio, int(pressure_every),
+            pressure_solver
+        )
     wall = time.perf_counter() - start
     if status != L.OK:
         err = SimulationError(status, info, grid.n)
@@ -122,7 +131,9 @@ def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, eff
 
     attrs = {"schedule": sched.name, "cells": nx * ny, "nx": nx, "ny": ny, "aspect": aspect, "scheme": scheme,
              "cfl": cfl, "pv_step": pv_step, "alpha_t_ratio": alpha_t_ratio, "pressure_every": int(pressure_every),
-             "n_steps": int(n_steps), "n_pressure_solves": int(n_solves), "wall_time_s": wall}
+             "n_steps": int(n_steps), "pressure_solver": pressure_solver, "n_pressure_solves": solver.n_solves,
+             "n_pressure_factorizations": solver.n_factorizations, "n_pressure_iterations": solver.n_iterations,
+             "pressure_time_s": solver.wall_s, "wall_time_s": wall}
     attrs.update({f"param_{k}": v for k, v in resolved.items()})
     attrs.update({f"effect_{k}": v for k, v in strengths.items()})
     ds = build_dataset(series, maps, totals, out_pv, np.zeros(0), grid.n, attrs)

@@ -8,13 +8,20 @@ Face fluxes are the face velocity times the component fractional flux of the upw
   component fractions of all its faces; its Lax-Wendroff Courant factor uses ``dt/dx`` times the row's mean x
   velocity. Where the x velocity of an interior face is negative (back flow around a low-permeability inclusion)
   the face takes the first-order fractions of the cell downstream in x (its upwind cell) instead;
-* y faces: first-order upwind (``transport._cell_fluxes`` of the cell the flow leaves); zero at ``y = 0, W/L``.
+* y faces: each column is a 1-D core too, swept with the same ``transport.advective_fluxes`` twice -- along the
+  column for the faces with upward flow (V > 0) and along the reversed column (a negative-stride view) for the faces
+  with downward flow -- so each face gets the TVD fractions of its own upwind stencil (first order at the first
+  interior face from the wall the flow comes from); the Lax-Wendroff Courant factor is ``dt/dy`` times the column's
+  mean |V|. The fluxes of the faces at ``y = 0, W/L`` are multiplied by V = 0 (no flow). With ``tvd = False`` both
+  directions are first-order upwind (the fractions of the cell the flow leaves). The scheme is mirror-symmetric in
+  y: the downward sweep of a flipped column is the upward sweep of the original.
 
 The update ``m_i -= dt [(U F)_e - (U F)_w] / dx + dt [(V G)_n - (V G)_s] / dy`` is conservative; the time step is
 ``dt = cfl / max_i s_i (max|U|_i / dx + max|V|_i / dy)`` with the wave-speed bound ``s_i`` of ``cell_properties``
 and the largest face velocities around cell ``i``, which reduces to the 1-D step for a uniform flow along x.
 """
 
+import numpy as np
 from numba import njit
 
 from .. import state_layout as L
@@ -24,9 +31,9 @@ __all__ = ["advective_fluxes_2d", "conservative_update", "stable_step", "outlet_
 
 
 @njit(cache=True, error_model="numpy")
-def advective_fluxes_2d(pr, nx, ny, ux, vy, tvd, lam_x, e3, e4, inj3, inj4, inj5, inj6, fx, gy):
+def advective_fluxes_2d(pr, nx, ny, ux, vy, tvd, lam_x, lam_y, e3, e4, inj3, inj4, inj5, inj6, fx, gy):
     """Component fractional fluxes of the x faces ``fx[NFLUX, ny, nx + 1]`` and y faces ``gy[NFLUX, ny + 1, nx]``
-    (to be multiplied by the face velocities ``ux``, ``vy``); ``lam_x = dt/dx``."""
+    (to be multiplied by the face velocities ``ux``, ``vy``); ``lam_x = dt/dx``, ``lam_y = dt/dy``."""
     for iy in range(ny):
         s = iy * nx
         mean_u = 0.0
@@ -38,11 +45,26 @@ def advective_fluxes_2d(pr, nx, ny, ux, vy, tvd, lam_x, e3, e4, inj3, inj4, inj5
         for j in range(1, nx):
             if ux[iy, j] < 0.0:
                 T._cell_fluxes(pr, s + j, row_flux, j)
-    for iy in range(1, ny):
-        face = gy[:, iy, :]
-        for ix in range(nx):
-            up = (iy - 1) * nx + ix if vy[iy, ix] >= 0.0 else iy * nx + ix
-            T._cell_fluxes(pr, up, face, ix)
+    down = np.empty((T.NFLUX, ny + 1))
+    for ix in range(nx):
+        mean_v = 0.0
+        up_flow = False
+        down_flow = False
+        for j in range(1, ny):
+            mean_v += abs(vy[j, ix])
+            up_flow |= vy[j, ix] >= 0.0
+            down_flow |= vy[j, ix] < 0.0
+        courant = lam_y * mean_v / (ny + 1)
+        column = pr[:, ix::nx]
+        face = gy[:, :, ix]
+        if up_flow:
+            T.advective_fluxes(column, ny, tvd, courant, e3, e4, 0.0, 0.0, 0.0, 0.0, face)
+        if down_flow:
+            T.advective_fluxes(column[:, ::-1], ny, tvd, courant, e3, e4, 0.0, 0.0, 0.0, 0.0, down)
+            for j in range(1, ny):
+                if vy[j, ix] < 0.0:
+                    for r in range(T.NFLUX):
+                        face[r, j] = down[r, ny - j]
 
 
 @njit(cache=True, error_model="numpy")
