@@ -46,6 +46,7 @@ from spflow.plugins.gap.least_squares import WhitenedProblem
 from spflow.plugins.gap.observed import load_experiments
 from spflow.plugins.gap.prediction import Predictor
 from spflow.plugins.gap.report import report_dataset, summary
+from spflow.plugins.gap.verdict import passes
 from spflow.synthetic import NoiseModel, make_coreflood
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -148,9 +149,45 @@ def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...]) -> d
         "coverage_heldout": [s["coverage"]["heldout_base"], s["coverage"]["heldout_final"]],
         "parameter_bias": [bias["base"], bias["final"]],
         "chi2_pvalue": s["fit"]["chi2_pvalue"],
+        "where": _where(g, variables),
+        "step0": _step0(g),
         "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
         "cpu_s": time.process_time() - start_cpu,
     }
+
+
+def _where(g, variables) -> dict:
+    """Base-model change points and flagged residual/input correlations on the calibration coreflood's likelihood
+    QoIs (what a null twin must not show beyond the nominal rate)."""
+    cal = {e.name for e in g.calibration}
+    keep = lambda x: x.experiment in cal and x.variable in variables  # noqa: E731
+    return {"change_points": [{"variable": c.variable, "slug": c.slug_name, "pv": c.pv, "pvalue": c.pvalue,
+                               "shift_whitened": c.shift_whitened} for c in g.base_view.change_points if keep(c)],
+            "input_correlations": [{"variable": c.variable, "channel": c.channel, "lag": c.lag, "z": c.statistic,
+                                    "pvalue": c.pvalue} for c in g.base_view.input_correlations
+                                   if keep(c) and c.significant]}
+
+
+def _step0(g) -> list[dict]:
+    """The first greedy step's refitted candidates with what an ambiguity rule needs: scores, calibration chi^2,
+    and the measurement SE of each one's ELPD difference to the best passing candidate."""
+    if not g.steps:
+        return []
+    step = g.steps[0]
+    passing = [x for x in step.scores.values() if passes(x, g.options.rule)]
+    best = max(passing, key=lambda x: x.delta_elpd) if passing else None
+    out = []
+    for name, x in step.scores.items():
+        pair_se = None
+        if best is not None:
+            ok = np.isfinite(best.gradient) & np.isfinite(x.gradient)
+            pair_se = float(np.linalg.norm(best.gradient[ok] - x.gradient[ok]))
+        loo = step.loo.get(name, (float("nan"),) * 3)
+        out.append({"name": name, "delta_elpd": x.delta_elpd, "se": x.se, "strength_z": x.strength_z,
+                    "physical": x.physical, "gap_closed": x.gap_closed, "chi2": step.fits[name].chi2,
+                    "passes": passes(x, g.options.rule), "pair_se": pair_se, "delta_loo": loo[0],
+                    "delta_loo_se": loo[1], "pareto_k_max": loo[2]})
+    return out
 
 
 # ---------------------------------------------------------------------------------------------------- metrics
@@ -167,6 +204,35 @@ def _mean(values) -> tuple[float, int]:
 def _median(values) -> tuple[float, int]:
     values = [v for v in values if v is not None and np.isfinite(v)]
     return (float(np.median(values)) if values else float("nan")), len(values)
+
+
+def indistinguishable_set(r: dict, present: bool = True, alpha: float = 0.01, se_factor: float = 2.0) -> list[str]:
+    """The ambiguity set of the first step under the alternative rule: the best passing candidate plus every
+    refitted candidate that is physical, (``present``:) significantly away from its base strength (|strength z| >
+    se_factor), and not separated from the best on *either* data set -- held out (gain within se_factor
+    measurement SE of the pair, or larger) or calibration (chi^2 within the chi^2_1 quantile at alpha of the
+    best's: the likelihood-ratio confidence set of equal-size extensions). Effects accepted in a later step are
+    removed, as in the diagnosis. Verdicts without an accepted first step keep the diagnosis's own set."""
+    from scipy.stats import chi2
+
+    rows = r.get("step0") or []
+    passing = [x for x in rows if x["passes"]]
+    if not passing or not r["accepted"] or r["verdict"] not in ("effect", "ambiguous"):
+        return list(r["ambiguity_set"] or [])
+    best = max(passing, key=lambda x: x["delta_elpd"])
+    limit = float(chi2.isf(alpha, 1))
+    out = [best["name"]] + [x["name"] for x in sorted(rows, key=lambda x: -x["delta_elpd"]) if x is not best
+                            and x["physical"] and (abs(x["strength_z"]) > se_factor or not present)
+                            and x["gap_closed"] > 0.0
+                            and (best["delta_elpd"] - x["delta_elpd"] <= se_factor * x["pair_se"]
+                                 or x["chi2"] - best["chi2"] <= limit)]
+    later = {n for names in r["accepted"][1:] for n in names}
+    return [n for n in out if n == best["name"] or n not in later]
+
+
+def _where_flag(r: dict, tool: str | None = None) -> bool:
+    tools = ("change_points", "input_correlations") if tool is None else (tool,)
+    return any(r["where"][t] for t in tools)
 
 
 def metrics(records: list[dict]) -> dict:
@@ -191,6 +257,29 @@ def metrics(records: list[dict]) -> dict:
         "parameter_bias_before_correct": _median(r["parameter_bias"][0] for r in correct),
         "parameter_bias_after_correct": _median(r["parameter_bias"][1] for r in correct),
         "pair_both_in_top3": _rate(set(r["truth_effects"]) <= set(r["ranking"][:3]) for r in pair),
+    }
+    if all("step0" in r for r in records):  # records of the current script (older ones lack these fields)
+        alt = {r["id"]: indistinguishable_set(r) for r in strong}
+        alt_any = {r["id"]: indistinguishable_set(r, present=False) for r in strong}
+        loo_top = [r for r in strong if r["step0"] and any(np.isfinite(x.get("delta_loo", np.nan)) for x in r["step0"])]
+        out |= {
+            "truth_in_set_indistinguishable_snr3": _rate(truth(r) in alt[r["id"]] for r in strong),
+            "mean_set_size_indistinguishable_snr3": _mean(len(alt[r["id"]]) for r in strong if alt[r["id"]]),
+            "truth_in_set_indistinguishable_any_strength_snr3": _rate(truth(r) in alt_any[r["id"]] for r in strong),
+            "mean_set_size_indistinguishable_any_strength_snr3": _mean(len(alt_any[r["id"]]) for r in strong
+                                                                      if alt_any[r["id"]]),
+            "where_change_point_null": _rate(_where_flag(r, "change_points") for r in null),
+            "where_input_correlation_null": _rate(_where_flag(r, "input_correlations") for r in null),
+            "where_flagged_snr3": _rate(_where_flag(r) for r in strong),
+            "where_flagged_undetected_snr3": _rate(_where_flag(r) for r in strong if r["verdict"] == "none"),
+        }
+        if loo_top:
+            best_loo = lambda r: max((x for x in r["step0"] if np.isfinite(x.get("delta_loo", np.nan))),  # noqa: E731
+                                     key=lambda x: x["delta_loo"])["name"]
+            best_held = lambda r: max(r["step0"], key=lambda x: x["delta_elpd"])["name"]  # noqa: E731
+            out |= {"loo_top_is_truth_snr3": _rate(best_loo(r) == truth(r) for r in loo_top),
+                    "heldout_top_is_truth_snr3": _rate(best_held(r) == truth(r) for r in loo_top)}
+    out |= {
         "cpu_s_per_twin": _median(r["cpu_s"] for r in records),
         "forward_runs_per_twin": _median(r["forward_runs"] for r in records),
     }
@@ -230,6 +319,9 @@ TARGETS = {
     "truth_in_set_snr3": (">=", 0.90), "mean_set_size_snr3": ("<=", 2.0), "ooc_flagged": (">=", 0.70),
     "ooc_confidently_misattributed": ("<=", 0.20), "gap_closed_median_correct": (">=", 0.80),
     "heldout_rmse_ratio_median_correct": ("<=", 0.50), "pair_both_in_top3": (">=", 0.60),
+    "truth_in_set_indistinguishable_snr3": (">=", 0.90), "mean_set_size_indistinguishable_snr3": ("<=", 2.0),
+    "truth_in_set_indistinguishable_any_strength_snr3": (">=", 0.90),
+    "mean_set_size_indistinguishable_any_strength_snr3": ("<=", 2.0),
 }
 
 
@@ -262,6 +354,14 @@ def _section(records: list[dict], figure: Path, md: Path) -> tuple[list[str], di
             ("yes" if (value <= target[1] if target[0] == "<=" else value >= target[1]) else "**no**")
         lines.append(f"| {key} | {_fmt(value, '.3g')} | {entry['n']} | "
                      f"{'' if target is None else f'{target[0]} {target[1]:g}'} | {met} |")
+    if "where_flagged_snr3" in m:
+        lines += ["", "`truth_in_set_indistinguishable*`: the first step's ambiguity set under the alternative rule of "
+                  "`indistinguishable_set` (this script): the best passing candidate plus every physical candidate that "
+                  "improves the calibration fit and is separated from the best on neither the held-out nor the "
+                  "calibration data (`_any_strength`: without the strength test). `where_*`: twins "
+                  "whose base model shows a change point inside a slug / a flagged residual-input correlation on the "
+                  "calibration flood's likelihood QoIs (each test at Bonferroni level 0.01); `_undetected`: among "
+                  "twins with verdict `none`."]
     lines += ["", "Power against the projected-fingerprint SNR (single-effect twins):", "",
               "| SNR | n | detection | correct effect first |", "|---|---|---|---|"]
     for row in pw:

@@ -58,6 +58,9 @@ def test_null_twin_is_not_flagged(tmp_path, capsys):
         assert summary(ds.load()) == result  # the summary is a function of the saved report alone
     # a noise-only misfit: the calibration chi2 is consistent with its degrees of freedom
     assert result["fit"]["chi2_pvalue"] > 0.01
+    # nor do the likelihood QoIs show change points inside slugs or follow an input channel
+    assert not [c for c in result["change_points"] if c["variable"] in ("dp", "oil_cut")]
+    assert not [c for c in result["input_correlations"] if c["variable"] in ("dp", "oil_cut")]
 
 
 def test_strong_capillary_pressure_twin_is_identified(tmp_path):
@@ -73,6 +76,12 @@ def test_strong_capillary_pressure_twin_is_identified(tmp_path):
     assert result["gap_cells"], "a strong effect leaves significant gap cells in the base model"
     ranked = {r["name"]: r for r in result["ranked_effects"]}
     assert ranked["capillary_pressure"]["passes"] and not ranked.get("dispersion", {}).get("passes", False)
+    # where: the base model's Δp residual on the calibration flood follows an injected channel, the final's does not
+    def follows(model):
+        return [i for i in range(report.sizes["input_correlation"]) if report["xcorr_variable"].values[i] == "dp"
+                and report["xcorr_experiment"].values[i] == "BCF1" and report["xcorr_significant"].values[model, i]]
+    assert follows(0) and not follows(1)
+    assert all(c["slug"] in ("IWF", "HTDS", "SP", "P", "EWF") and c["pvalue"] < 0.01 for c in result["change_points"])
     # the final model's held-out predictive intervals cover at least as well as the base model's
     assert result["coverage"]["heldout_final"] >= result["coverage"]["heldout_base"]
     # units in attrs everywhere

@@ -68,3 +68,24 @@ def test_truth_strengths_are_physical_and_away_from_the_base():
             assert c.physical[0] - 1e-12 <= s <= c.physical[1] + 1e-12
             if c.base > 0:
                 assert max(s / c.base, c.base / s) >= 1.5 - 1e-9
+
+
+def test_indistinguishable_set_against_hand_computed_members():
+    def row(name, delta, pair_se, chi2, strength_z=3.0, physical=True, closed=0.5, passes=False):
+        return {"name": name, "delta_elpd": delta, "se": 1.0, "strength_z": strength_z, "physical": physical,
+                "gap_closed": closed, "chi2": chi2, "passes": passes, "pair_se": pair_se}
+
+    r = record("single:shear_thinning", 10.0, "effect", [["a"]], ["a"], {"shear_thinning": 0.5})
+    r["step0"] = [row("a", 100.0, 0.0, 80.0, passes=True),
+                  row("b", 85.0, 8.0, 200.0),           # held out: 15 <= 2 * 8 -> member
+                  row("c", 50.0, 10.0, 85.0),           # calibration: chi2 within 6.63 of the best -> member
+                  row("d", 50.0, 10.0, 90.0),           # separated on both -> not a member
+                  row("e", 120.0, 5.0, 70.0, strength_z=1.0),  # strength not significant -> only without the test
+                  row("f", 99.0, 5.0, 80.0, physical=False),   # unphysical -> never
+                  row("g", 99.0, 5.0, 80.0, closed=-0.1)]      # does not improve the calibration fit -> never
+    assert gv.indistinguishable_set(r) == ["a", "b", "c"]
+    assert gv.indistinguishable_set(r, present=False) == ["a", "e", "b", "c"]
+    r["accepted"] = [["a"], ["b"]]  # accepted in a later step: "both", not "either"
+    assert gv.indistinguishable_set(r) == ["a", "c"]
+    r["verdict"] = "out_of_catalogue"
+    assert gv.indistinguishable_set(r) == ["a"]  # the diagnosis's own set is kept without a declared effect

@@ -6,12 +6,15 @@
 
 1. **Calibrate** the base model on the calibration experiments (:mod:`~spflow.plugins.gap.base_calibration`).
 2. **Where** — whitened residuals per QoI x slug cell, Ljung-Box whiteness, signature predictive checks, ranked gap
-   cells (:mod:`~spflow.plugins.gap.localisation`, :mod:`~spflow.plugins.gap.signatures`); the calibration gap is
-   significant when ``P(chi^2_{n-p} >= chi^2) < alpha``.
+   cells (:mod:`~spflow.plugins.gap.localisation`, :mod:`~spflow.plugins.gap.signatures`), mean-shift change points
+   inside slugs (:mod:`~spflow.plugins.gap.change_points`) and residual/input cross-correlations
+   (:mod:`~spflow.plugins.gap.input_correlation`); the calibration gap is significant when
+   ``P(chi^2_{n-p} >= chi^2) < alpha``.
 3. **Which** — projected finite-strength fingerprints of every candidate and their angle matrix
    (:mod:`~spflow.plugins.gap.fingerprints`), a shortlist, refits of "reference + effect"
    (:mod:`~spflow.plugins.gap.candidates`) scored out of sample (held-out experiments, else leave-one-slug-out;
-   :mod:`~spflow.plugins.gap.predictive_scores`), the decision rule and greedy addition of further effects
+   :mod:`~spflow.plugins.gap.predictive_scores`; PSIS-LOO on the calibration data is reported next to it,
+   :mod:`~spflow.plugins.gap.psis_loo`), the decision rule and greedy addition of further effects
    (:mod:`~spflow.plugins.gap.verdict`).
 4. **How far** — gap closed, RMSE ratios, interval coverage and parameter shifts of the final model against the
    base (:mod:`~spflow.plugins.gap.quantification`).
@@ -32,13 +35,16 @@ from .base_calibration import calibrate_base
 from .base_model import BaseModel
 from .candidates import fingerprint_columns, refit, shortlist
 from .catalogue import CandidateEffect, candidates_for
+from .change_points import ChangePoint, change_points
 from .fingerprints import NuisanceProjector, ScreenResult, screen
+from .input_correlation import InputCorrelation, input_correlations
 from .layout import Layout, make_layout
 from .least_squares import Fit
 from .localisation import Cell, cells, gap_cells, ljung_box
 from .observed import Experiment, load_experiments
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
+from .psis_loo import compare_loo, psis_loo
 from .quantification import gap_closed, parameter_covariance, predictive_std, raw_jacobian
 from .signatures import predictive_pvalues, signatures
 from .verdict import CandidateScore, Rule, ambiguity_set, verdict
@@ -65,6 +71,10 @@ class Options:
     seed: int = 0
     diff_step: float = 0.01
     loso_nfev: int = 8
+    max_lag: float = 1.5
+    min_segment: int = 3
+    null_draws: int = 20000
+    loo_draws: int = 2000
 
 
 @dataclass
@@ -79,6 +89,7 @@ class Step:
     fits: dict[str, Fit]
     scores: dict[str, CandidateScore]
     out_of_sample: dict[str, Predictive]
+    loo: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
 
 @dataclass
@@ -94,6 +105,8 @@ class ModelView:
     ljung_box: dict[tuple[str, str], tuple[float, float, int]]
     signatures: dict[str, dict[str, tuple[float, float]]]
     predicted_signatures: dict[str, dict[str, float]]
+    change_points: list[ChangePoint]
+    input_correlations: list[InputCorrelation]
 
 
 @dataclass
@@ -161,7 +174,11 @@ def _view(fitted, predictor, layout, experiments, options, rng) -> ModelView:
         sigs[exp.name] = predictive_pvalues(exp, _series(layout, obs, exp),
                                             [_series(layout, r, exp) for r in reps])
         pred_sigs[exp.name] = signatures(exp, _series(layout, y, exp))
-    return ModelView(fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs)
+    cps = change_points(layout, w, e, slug_names, options.alpha, options.min_segment, options.null_draws,
+                        options.seed)
+    xcorr = input_correlations(layout, w, experiments, options.alpha, options.max_lag, options.pv_step,
+                               options.null_draws, options.seed)
+    return ModelView(fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs, cps, xcorr)
 
 
 def _label(fitted: Fit) -> str:
@@ -225,6 +242,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         NuisanceProjector(fitting.jacobian, options.nuisance_scale))
         chosen = shortlist(result, options.shortlist, options.cos_threshold)
         step = Step(_label(fitting), _label(reference), result, [remaining[i].name for i in chosen], {}, {}, {})
+        loo_ref = psis_loo(reference, options.nuisance_scale, options.loo_draws, options.seed)
         for i in chosen:
             c = remaining[i]
             say(f"refitting {_label(fitting)}+{c.name} (screen z = {result.best_z()[i]:.2f})")
@@ -238,6 +256,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             sd = np.sqrt(parameter_covariance(f.jacobian, options.nuisance_scale)[-1, -1])
             strength_z = (f.z[-1] - c.unit(c.base)) / sd
             step.fits[c.name], step.out_of_sample[c.name] = f, w
+            loo = psis_loo(f, options.nuisance_scale, options.loo_draws, options.seed)
+            k = loo.pareto_k[np.isfinite(loo.pareto_k)]
+            step.loo[c.name] = (*compare_loo(loo, loo_ref), float(k.max()) if k.size else float("nan"))
             step.scores[c.name] = CandidateScore(c.name, delta, se, se_pointwise, strengths[c.name], strength_z,
                                                  physical, gap_closed(base_fit.chi2, f.chi2, dof),
                                                  fitting.chi2 - f.chi2, w.gradient)

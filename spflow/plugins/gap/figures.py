@@ -1,6 +1,8 @@
 """Figures of a gap report (matplotlib, Agg): drawn from the report Dataset alone.
 
-* ``gap_heatmap.png`` — whitened residuals, QoI x PV per experiment, base and final model, slug bands;
+* ``gap_heatmap.png`` — whitened residuals, QoI x PV per experiment, base and final model, slug bands, significant
+  change points inside slugs (black ticks) and, in the row labels, the input channel each QoI's residual follows
+  significantly (best lag);
 * ``fingerprint_angles.png`` — cosines between projected fingerprints (a-priori ambiguity);
 * ``candidates.png`` — the candidate tables of every greedy step with the verdict;
 * ``predictions.png`` — data, base and final predictions (final 90 % predictive band) per QoI and experiment;
@@ -41,10 +43,32 @@ def _slug_bands(ax, r: xr.Dataset, i: int, label: bool):
         start = end
 
 
+def _change_point_marks(ax, r, model: str, exp: str, qois: list[str]):
+    for i in range(r.sizes.get("change_point", 0)):
+        if str(r["cp_model"].values[i]) == model and str(r["cp_experiment"].values[i]) == exp:
+            row = qois.index(str(r["cp_variable"].values[i]))
+            for color, width in (("w", 3.4), ("k", 1.6)):  # black tick with a white halo: visible on any colour
+                ax.plot([float(r["cp_pv"][i])] * 2, [row - 0.45, row + 0.45], color=color, lw=width,
+                        solid_capstyle="butt")
+
+
+def _row_label(r, m: int, exp: str, qoi: str) -> str:
+    """``qoi`` plus the input channel its residual follows most significantly (``~polymer@0.3``: the injected
+    polymer concentration 0.3 PV earlier), if any is significant."""
+    rows = [i for i in range(r.sizes.get("input_correlation", 0))
+            if r["xcorr_significant"][m, i] and str(r["xcorr_experiment"].values[i]) == exp
+            and str(r["xcorr_variable"].values[i]) == qoi]
+    if not rows:
+        return qoi
+    i = min(rows, key=lambda i: (float(r["xcorr_pvalue"][m, i]), -float(r["xcorr_statistic"][m, i])))
+    return f"{qoi}\n~{str(r['xcorr_channel'].values[i]).removesuffix('_ppm')}@{float(r['xcorr_lag'][m, i]):.1f}"
+
+
 def _heatmap(r, path, plt):
     qois = _qois(r)
     exps = list(r["experiment"].values)
-    fig, axes = plt.subplots(2, len(exps), figsize=(4.2 * len(exps) + 1.2, 5.2), squeeze=False, sharey=True)
+    fig, axes = plt.subplots(2, len(exps), figsize=(4.8 * len(exps) + 1.2, 5.2), squeeze=False,
+                             gridspec_kw={"wspace": 0.45, "hspace": 0.35})
     mesh = None
     for m, model in enumerate(r["model"].values):
         for i, exp in enumerate(exps):
@@ -57,7 +81,8 @@ def _heatmap(r, path, plt):
             for k in np.nancumsum(np.diff(np.r_[0, r["slug_end_pv"].values[i]]))[:-1]:
                 ax.axvline(k, color="k", lw=0.6)
             _slug_bands(ax, r, i, m == 0)
-            ax.set_yticks(range(len(qois)), qois)
+            _change_point_marks(ax, r, str(model), str(exp), qois)
+            ax.set_yticks(range(len(qois)), [_row_label(r, m, str(exp), q) for q in qois], fontsize=7)
             ax.set_title(f"{exp} ({r['role'].values[i]}) — {model}", fontsize=9, pad=12 if m == 0 else 4)
             if m == 1:
                 ax.set_xlabel("injected PV")

@@ -9,8 +9,15 @@ Dataset layout (every variable has ``units``; mixed-unit tables name their units
   ``cell_bias_z``, ``cell_rms`` and ``gap_rank`` (1 = largest significant gap, 0 = not a gap cell);
 * ``block`` table (QoI x experiment): Ljung-Box ``whiteness_q`` / ``whiteness_pvalue``, ``rmse``, ``coverage``;
 * ``signature`` table: ``signature_observed``, ``signature_predicted`` and ``signature_pvalue`` per model;
+* ``change_point`` table (significant mean shifts inside slugs, both models, :mod:`~spflow.plugins.gap.change_points`):
+  ``cp_model``, ``cp_variable``, ``cp_experiment``, ``cp_slug``, ``cp_pv``, ``cp_statistic``, ``cp_pvalue``,
+  ``cp_shift_whitened``, ``cp_shift``;
+* ``input_correlation`` table (QoI x experiment x input channel, :mod:`~spflow.plugins.gap.input_correlation`):
+  ``xcorr_z`` per (model, lag), and per model the best lag ``xcorr_lag``, ``xcorr_statistic``, ``xcorr_pvalue``,
+  ``xcorr_effect``, ``xcorr_significant``;
 * ``candidate`` tables per greedy ``step``: ``screen_z``, ``snr``, ``absorbed``, ``fitted_strength``,
-  ``delta_elpd`` (+ SEs), ``gap_closed``, ``passes``; ``fingerprint_cos`` of the first step;
+  ``delta_elpd`` (+ SEs), ``delta_elpd_loo`` (+ SE, ``pareto_k_max``; PSIS-LOO on the calibration data, reported
+  only), ``gap_closed``, ``passes``; ``fingerprint_cos`` of the first step;
 * ``param`` table: ``theta`` per model and ``shift_fraction``;
 * scalars and attrs: chi^2, p-value, gap-closed fractions, coverage, ELPD, the verdict and the ambiguity set.
 
@@ -145,13 +152,63 @@ def _signature_vars(g: GapDiagnosis, views: list[ModelView]):
     return coords, data
 
 
+def _change_point_vars(views: list[ModelView], models: list[str]):
+    rows = [(m, c) for m, v in zip(models, views) for c in v.change_points]
+    coords = {"cp_model": ("change_point", np.array([m for m, _ in rows], dtype=str)),
+              "cp_variable": ("change_point", np.array([c.variable for _, c in rows], dtype=str)),
+              "cp_experiment": ("change_point", np.array([c.experiment for _, c in rows], dtype=str)),
+              "cp_slug": ("change_point", np.array([c.slug_name for _, c in rows], dtype=str))}
+    data = {
+        "cp_pv": ("change_point", np.array([c.pv for _, c in rows], float), {"units": "PV"}),
+        "cp_statistic": ("change_point", np.array([c.statistic for _, c in rows], float),
+                         {"units": "1", "long_name": "max |t| of a mean shift inside the slug"}),
+        "cp_pvalue": ("change_point", np.array([c.pvalue for _, c in rows], float), {"units": "1"}),
+        "cp_shift_whitened": ("change_point", np.array([c.shift_whitened for _, c in rows], float),
+                              {"units": "1", "long_name": "mean shift of the whitened residuals (sigma)"}),
+        "cp_shift": ("change_point", np.array([c.shift for _, c in rows], float),
+                     {"units": "of cp_variable (Pa for dp, 1 for fractions, ppm for concentrations)",
+                      "long_name": "mean shift of the residuals (model - data)"}),
+    }
+    return coords, data
+
+
+def _correlation_vars(views: list[ModelView]):
+    keys = sorted((c.variable, c.experiment, c.channel) for c in views[0].input_correlations)
+    tables = [{(c.variable, c.experiment, c.channel): c for c in v.input_correlations} for v in views]
+    lags = views[0].input_correlations[0].lags if keys else np.zeros(0)
+    coords = {"xcorr_variable": ("input_correlation", np.array([k[0] for k in keys], dtype=str)),
+              "xcorr_experiment": ("input_correlation", np.array([k[1] for k in keys], dtype=str)),
+              "xcorr_channel": ("input_correlation", np.array([k[2] for k in keys], dtype=str)),
+              "lag": ("lag", lags, {"units": "PV"})}
+
+    def table(f):
+        return np.array([[f(t[k]) for k in keys] for t in tables], dtype=float).reshape(len(views), len(keys))
+
+    data = {
+        "xcorr_z": (("model", "input_correlation", "lag"),
+                    np.array([[t[k].z for k in keys] for t in tables], float).reshape(len(views), len(keys),
+                                                                                      lags.size),
+                    {"units": "1", "long_name": "GLS z of the residual on the lagged input channel"}),
+        "xcorr_lag": (("model", "input_correlation"), table(lambda c: c.lag), {"units": "PV"}),
+        "xcorr_statistic": (("model", "input_correlation"), table(lambda c: c.statistic), {"units": "1"}),
+        "xcorr_pvalue": (("model", "input_correlation"), table(lambda c: c.pvalue),
+                         {"units": "1", "long_name": "p-value of max |z| over the lags"}),
+        "xcorr_effect": (("model", "input_correlation"), table(lambda c: c.effect),
+                         {"units": "of xcorr_variable", "long_name": "residual change with the channel's step"}),
+        "xcorr_significant": (("model", "input_correlation"), table(lambda c: c.significant).astype(np.int8),
+                              {"units": "1"}),
+    }
+    return coords, data
+
+
 def _candidate_vars(g: GapDiagnosis):
     names = [c.name for c in g.candidates]
     shape = (len(g.steps), len(names))
     tables = {k: np.full(shape, np.nan) for k in ("screen_z", "snr", "absorbed", "fitted_strength", "strength_z",
                                                   "delta_elpd",
                                                   "delta_elpd_se", "delta_elpd_se_pointwise", "gap_closed",
-                                                  "chi2_calibration")}
+                                                  "chi2_calibration", "delta_elpd_loo", "delta_elpd_loo_se",
+                                                  "pareto_k_max")}
     flags = {k: np.zeros(shape, dtype=np.int8) for k in ("shortlisted", "passes", "physical")}
     for s, step in enumerate(g.steps):
         for i, name in enumerate(step.screen.names):
@@ -169,13 +226,17 @@ def _candidate_vars(g: GapDiagnosis):
             tables["delta_elpd_se_pointwise"][s, j] = score.se_pointwise
             tables["gap_closed"][s, j] = score.gap_closed
             tables["chi2_calibration"][s, j] = step.fits[name].chi2
+            if name in step.loo:
+                loo = step.loo[name]
+                tables["delta_elpd_loo"][s, j], tables["delta_elpd_loo_se"][s, j], tables["pareto_k_max"][s, j] = loo
             flags["passes"][s, j] = int(passes(score, g.options.rule))
             flags["physical"][s, j] = int(score.physical)
     first = g.steps[0].screen
     order = [first.names.index(n) for n in names]
     cos = first.cos[np.ix_(order, order)]
     units = {"fitted_strength": "effect strength (see spflow list effects)", "delta_elpd": "nat",
-             "delta_elpd_se": "nat", "delta_elpd_se_pointwise": "nat"}
+             "delta_elpd_se": "nat", "delta_elpd_se_pointwise": "nat", "delta_elpd_loo": "nat",
+             "delta_elpd_loo_se": "nat"}
     data = {k: (("step", "candidate"), v, {"units": units.get(k, "1")}) for k, v in tables.items()}
     data |= {k: (("step", "candidate"), v, {"units": "1"}) for k, v in flags.items()}
     data["step_reference"] = ("step", [s.reference for s in g.steps])
@@ -219,7 +280,8 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
     coords = {"model": ["base", "final"], "experiment": [e.name for e in experiments],
               "pv": ("pv", grid, {"units": "PV"}),
               "role": ("experiment", ["calibration"] * len(g.calibration) + ["heldout"] * len(g.heldout))}
-    for part in (_cell_vars(g, views), _block_vars(g, views), _signature_vars(g, views), _candidate_vars(g)):
+    for part in (_cell_vars(g, views), _block_vars(g, views), _signature_vars(g, views), _candidate_vars(g),
+                 _change_point_vars(views, ["base", "final"]), _correlation_vars(views)):
         coords.update(part[0])
         data.update(part[1])
     params = g.base.parameters
@@ -267,6 +329,8 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
             row.update(fitted_strength=_f(r["fitted_strength"][0, j]), strength_z=_f(r["strength_z"][0, j]),
                        delta_elpd=_f(r["delta_elpd"][0, j]),
                        delta_elpd_se=_f(r["delta_elpd_se"][0, j]), gap_closed=_f(r["gap_closed"][0, j]),
+                       delta_elpd_loo=_f(r["delta_elpd_loo"][0, j]) if "delta_elpd_loo" in r else None,
+                       delta_elpd_loo_se=_f(r["delta_elpd_loo_se"][0, j]) if "delta_elpd_loo" in r else None,
                        physical=bool(r["physical"][0, j]), passes=bool(r["passes"][0, j]))
         ranked.append(row)
     def descending(x):
@@ -281,6 +345,19 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
               "n": int(r["cell_n"][i]), "normalised_chi2": _f(r["cell_chi2"][0, i]),
               "pvalue": _f(r["cell_pvalue"][0, i]), "rms": _f(r["cell_rms"][0, i]),
               "normalised_chi2_final": _f(r["cell_chi2"][1, i])} for i in order]
+    base_cp = [i for i in range(r.sizes.get("change_point", 0)) if str(r["cp_model"].values[i]) == "base"]
+    change = [{"variable": str(r["cp_variable"].values[i]), "experiment": str(r["cp_experiment"].values[i]),
+               "slug": str(r["cp_slug"].values[i]), "pv": _f(r["cp_pv"][i]), "statistic": _f(r["cp_statistic"][i]),
+               "pvalue": _f(r["cp_pvalue"][i]), "shift_whitened": _f(r["cp_shift_whitened"][i]),
+               "shift": _f(r["cp_shift"][i])} for i in base_cp[:top_cells]]
+    n_xc = r.sizes.get("input_correlation", 0)
+    flagged = sorted((i for i in range(n_xc) if r["xcorr_significant"][0, i]),
+                     key=lambda i: (float(r["xcorr_pvalue"][0, i]), -float(r["xcorr_statistic"][0, i])))
+    xcorr = [{"variable": str(r["xcorr_variable"].values[i]), "experiment": str(r["xcorr_experiment"].values[i]),
+              "channel": str(r["xcorr_channel"].values[i]), "lag_pv": _f(r["xcorr_lag"][0, i]),
+              "z": _f(r["xcorr_z"][0, i, int(np.nanargmax(np.abs(r["xcorr_z"].values[0, i])))]),
+              "pvalue": _f(r["xcorr_pvalue"][0, i]), "effect": _f(r["xcorr_effect"][0, i]),
+              "significant_final": bool(r["xcorr_significant"][1, i])} for i in flagged[:top_cells]]
     rmse_ratio = {f"{v}:{e}": _f(r["rmse"][1, k] / r["rmse"][0, k]) if r["rmse"][0, k] > 0 else None
                   for k, (v, e) in enumerate(zip(r["block_variable"].values, r["block_experiment"].values))}
     scalar = {k: _f(r[k]) for k in ("chi2_base", "chi2_final", "dof", "chi2_pvalue", "gap_closed_calibration",
@@ -298,6 +375,9 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
         "score": r.attrs["score_kind"],
         "ranked_effects": ranked,
         "gap_cells": cells,
+        "change_points": change,
+        "change_points_final": int(r.sizes.get("change_point", 0) - len(base_cp)),
+        "input_correlations": xcorr,
         "gap_closed": {"calibration": scalar["gap_closed_calibration"], "heldout": scalar["gap_closed_heldout"]},
         "rmse_ratio": rmse_ratio,
         "coverage": {k.replace("coverage_", ""): v for k, v in scalar.items() if k.startswith("coverage_")},

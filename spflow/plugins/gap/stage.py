@@ -63,6 +63,8 @@ OPTION_PARAMS = {
     "nuisance_scale": Param(float, 0.5, bounds=(1e-3, 1e3),
                             doc="prior scale of calibrated-parameter shifts in the unit box (projection, Laplace)"),
     "replicates": Param(int, 200, bounds=(10, 100000), doc="replicated data sets of the signature checks"),
+    "max_lag": Param(float, 1.5, bounds=(0.0, 10.0), unit="PV",
+                     doc="largest lag of the residual/input cross-correlation (effluent lags its slug ~1 PV)"),
     "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="seed of the replicates and extra starts"),
     "min_delta": Param(float, 4.0, bounds=(0.0, None), unit="nat", doc="decision rule: minimum ELPD gain"),
     "se_factor": Param(float, 2.0, bounds=(0.0, None), doc="decision rule: gain / standard error"),
@@ -81,7 +83,7 @@ def options_from(values: dict) -> Options:
 
 class Diagnose(Stage):
     name = "diagnose"
-    version = "2"
+    version = "3"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})

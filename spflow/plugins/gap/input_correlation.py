@@ -1,0 +1,148 @@
+"""Residual/input cross-correlation: does the misfit follow an injected channel, and with which lag (gap notes §2.8)?
+
+The system-identification test of unmodelled dynamics (Ljung 1999 §16.6; MATLAB ``resid``): residuals that
+correlate with an input at a positive lag point to a mechanism driven by that input -- with salinity steps to
+salinity-dependent viscosity or phase behaviour, with the polymer front to IPV, retention or kinetics, with the
+surfactant slug to surfactant retention or desaturation. The channels are the injected schedule's per-slug
+``salinity_ppm``, ``surfactant_ppm`` and ``polymer_ppm`` at each PV (Table 2.5), lagged by ``0, pv_step, ...,
+max_lag`` PV (before injection started a channel holds its first slug's value). The injection rate is one value
+per coreflood in spflow's schedules (``QINJ``), so it has no within-coreflood variation to correlate with; rate
+effects show between corefloods. A channel that is constant over a block at every lag (e.g. salinity in BCF1) is
+not testable and is left out.
+
+**Statistic.** Per (variable, experiment) block with error model ``W`` (the AR(1) whitening of
+:mod:`~spflow.plugins.gap.error_model`) and whitened residuals ``w = W e``, the residual is regressed on each lagged
+channel ``x_l`` by generalised least squares under that same AR(1) model, with an intercept (the block's bias is
+not an input effect): with ``a_l`` the part of ``W x_l`` orthogonal to ``W 1``,
+
+    z_l = a_l' w / (||a_l|| s_l),   beta_l = a_l' w / ||a_l||^2   (variable units per channel unit),
+    s_l^2 = max(1, RSS_l / (n - 2)),
+
+``RSS_l`` the residual sum of squares of the regression on (intercept, channel). This is the prewhitened
+cross-correlation (Box & Jenkins): whitening the input with the residual's own AR(1) filter makes ``z_l`` the
+matched-filter (GLS t) statistic. The scale ``s_l`` is the error model's (1) unless the residual scatter is larger
+(a misfit that merely scatters more than the noise is then not credited to the channel). Per channel the test
+statistic is ``Z = max_l |z_l|``; since ``w`` is iid N(0, 1) under the model and the channel is fixed, its null
+distribution depends only on the lagged regressors and is drawn by Monte Carlo with iid normal ``w`` (exact,
+``(1 + count) / (draws + 1)``), whatever the input's autocorrelation.
+The diagnosis flags a (block, channel) pair when its p-value passes a Bonferroni test at ``alpha`` over all pairs.
+The effect size is ``beta`` at the best lag times the channel's range: the residual change (variable units) that
+goes with the channel's step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from spflow.core.errors import ParameterError
+
+from .error_model import BlockErrorModel
+from .layout import Layout
+from .observed import Experiment
+
+__all__ = ["CHANNELS", "InputCorrelation", "channel_series", "lagged", "lag_scan", "input_correlations"]
+
+#: input channels of a schedule (slug fields, ppm)
+CHANNELS = ("salinity_ppm", "surfactant_ppm", "polymer_ppm")
+_RELATIVE_TOL = 1e-9
+
+
+def channel_series(exp: Experiment, channel: str, pv: np.ndarray) -> np.ndarray:
+    """The injected value of ``channel`` (a :class:`~spflow.plugins.forward.schedule.Slug` field, ppm) at
+    injected pore volumes ``pv`` (before 0 PV: the first slug's value)."""
+    if channel not in CHANNELS:
+        raise ParameterError(f"input channel {channel!r} is unknown; allowed {list(CHANNELS)}")
+    values = np.array([getattr(s, channel) for s in exp.schedule.slugs])
+    return values[exp.slug_index(np.maximum(np.asarray(pv, dtype=float), 0.0))]
+
+
+def lagged(exp: Experiment, channel: str, pv: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """(n, L) matrix of the channel at ``pv - lag`` for every lag (PV)."""
+    return np.stack([channel_series(exp, channel, np.asarray(pv) - lag) for lag in lags], axis=1)
+
+
+def lag_scan(w: np.ndarray, noise: BlockErrorModel, x: np.ndarray, draws: int, rng: np.random.Generator,
+             ) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """(z_l, beta_l, p-value of max |z_l|) of whitened residuals ``w`` against the lagged channel columns ``x``
+    (n, L) under the AR(1) error model ``noise`` (module docstring); None when no lag varies over the block."""
+    ones = noise.whiten(np.ones(w.size))
+    a = noise.whiten(np.asarray(x, dtype=float))
+    a = a - np.outer(ones, ones @ a) / (ones @ ones)
+    norm = np.linalg.norm(a, axis=0)
+    scale = np.linalg.norm(noise.whiten(x), axis=0)
+    ok = norm > _RELATIVE_TOL * np.maximum(scale, 1e-300)
+    if not ok.any():
+        return None
+    u = a[:, ok] / norm[ok]
+    c = ones / np.linalg.norm(ones)
+    n = w.size
+
+    def scan(v):  # z (lags, ...) and the raw projections of residual columns v (n, ...)
+        proj = np.tensordot(u, v, axes=(0, 0))
+        rss = np.sum(v * v, axis=0) - np.tensordot(c, v, axes=(0, 0)) ** 2 - proj**2
+        return proj / np.sqrt(np.maximum(rss / (n - 2), 1.0)), proj
+
+    z, beta = np.full(x.shape[1], np.nan), np.full(x.shape[1], np.nan)
+    z[ok], proj = scan(w)
+    beta[ok] = proj / norm[ok]
+    stat = float(np.max(np.abs(z[ok])))
+    null = np.abs(scan(rng.standard_normal((n, draws)))[0]).max(axis=0)
+    return z, beta, float((1 + np.sum(null >= stat)) / (draws + 1))
+
+
+@dataclass(frozen=True)
+class InputCorrelation:
+    """The lag scan of one (variable, experiment, channel): z and beta per lag, the best lag and its effect."""
+
+    variable: str
+    experiment: str
+    channel: str
+    lags: np.ndarray
+    z: np.ndarray
+    beta: np.ndarray
+    pvalue: float
+    channel_range: float
+    significant: bool = False
+
+    @property
+    def best(self) -> int:
+        return int(np.nanargmax(np.abs(self.z)))
+
+    @property
+    def lag(self) -> float:
+        return float(self.lags[self.best])
+
+    @property
+    def statistic(self) -> float:
+        return float(np.abs(self.z[self.best]))
+
+    @property
+    def effect(self) -> float:
+        """Residual change (variable units) that goes with the channel's full step at the best lag."""
+        return float(self.beta[self.best] * self.channel_range)
+
+
+def input_correlations(layout: Layout, whitened: np.ndarray, experiments: list[Experiment], alpha: float,
+                       max_lag: float, pv_step: float, draws: int = 20000, seed: int = 0) -> list[InputCorrelation]:
+    """Lag scans of every testable (block, channel) of ``layout``, flagged at Bonferroni level ``alpha`` over all of
+    them; most significant (then largest statistic) first."""
+    if not max_lag >= 0.0:
+        raise ParameterError(f"max_lag = {max_lag!r} PV is out of range; allowed [0, inf)")
+    lags = np.arange(int(np.floor(max_lag / pv_step + 1e-9)) + 1) * pv_step
+    rng = np.random.default_rng(seed)
+    by_name = {e.name: e for e in experiments}
+    out = []
+    for block, s in zip(layout.blocks, layout.slices()):
+        exp = by_name[block.experiment]
+        for channel in CHANNELS:
+            x = lagged(exp, channel, block.pv, lags)
+            scan = lag_scan(whitened[s], block.noise, x, draws, rng)
+            if scan is not None:
+                out.append(InputCorrelation(block.variable, block.experiment, channel, lags, *scan,
+                                            float(np.ptp(x))))
+    level = alpha / max(len(out), 1)
+    out = [InputCorrelation(c.variable, c.experiment, c.channel, c.lags, c.z, c.beta, c.pvalue, c.channel_range,
+                            c.pvalue < level) for c in out]
+    return sorted(out, key=lambda c: (c.pvalue, -c.statistic))

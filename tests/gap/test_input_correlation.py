@@ -1,0 +1,115 @@
+"""Residual/input cross-correlation: the lag scan against an explicit-covariance GLS regression, a known lagged
+dependence found at its lag with its size, constant channels left out, and AR(1) noise flagged at the nominal rate
+over many seeds (while a test that ignores the AR(1) model is not)."""
+
+import numpy as np
+import pytest
+from scipy.stats import binom, norm
+
+from spflow.core.errors import ParameterError
+from spflow.plugins.forward.schedule import BCF_SCHEDULES
+from spflow.plugins.gap.error_model import BlockErrorModel
+from spflow.plugins.gap.input_correlation import channel_series, input_correlations, lag_scan, lagged
+from spflow.plugins.gap.layout import Block, Layout
+from spflow.plugins.gap.observed import Experiment
+from spflow.synthetic import NoiseModel
+
+STEP = 0.1
+
+
+def experiment(schedule="BCF1"):
+    s = BCF_SCHEDULES[schedule]
+    pv = np.round(np.arange(1, int(round(s.total_pv / STEP)) + 1) * STEP, 10)
+    return Experiment(schedule, s, {}, NoiseModel(), True, pv, STEP, {}, None, None)
+
+
+def ar1_covariance(scale, phi):
+    n = scale.size
+    corr = phi ** np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    return corr * np.outer(scale, scale)
+
+
+def test_channel_series_follows_the_schedule():
+    exp = experiment("BCF2")  # IWF 1.6, HTDS 1.0, SP 0.25, P 0.5, EWF 1.59 PV
+    pv = np.array([-0.3, 0.5, 2.0, 2.7, 3.0, 4.0])
+    assert list(channel_series(exp, "salinity_ppm", pv)) == [9400, 9400, 17500, 17500, 9400, 9400]
+    assert list(channel_series(exp, "polymer_ppm", pv)) == [0, 0, 0, 2500, 2500, 0]
+    assert list(channel_series(exp, "surfactant_ppm", pv)) == [0, 0, 0, 6780, 0, 0]
+    x = lagged(exp, "polymer_ppm", pv, np.array([0.0, 0.5]))
+    assert list(x[:, 1]) == list(channel_series(exp, "polymer_ppm", pv - 0.5))
+    with pytest.raises(ParameterError, match="allowed \\['salinity_ppm'"):
+        channel_series(exp, "rate", pv)
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.6, 1.0])
+def test_lag_scan_matches_explicit_gls(phi):
+    rng = np.random.default_rng(4)
+    n = 35
+    scale = rng.uniform(0.5, 2.0, n)
+    noise = BlockErrorModel(scale, phi)
+    x = np.stack([(np.arange(n) >= 10 + 3 * j) & (np.arange(n) < 22 + 3 * j) for j in range(4)], 1) * 500.0
+    e = noise.draw(rng, 1)[0] + 0.004 * x[:, 2] + (0.8 if phi < 1 else 0.0)
+    z, beta, p = lag_scan(noise.whiten(e), noise, x, 4000, rng)
+    if phi == 1.0:  # random walk with steps scale_t
+        cov = np.minimum.outer(np.cumsum(scale**2), np.cumsum(scale**2))
+    else:
+        cov = ar1_covariance(scale, phi)
+    inv = np.linalg.inv(cov)
+    for j in range(x.shape[1]):
+        design = np.column_stack([np.ones(n), x[:, j]])
+        info = np.linalg.inv(design.T @ inv @ design)
+        coef = info @ design.T @ inv @ e
+        r = e - design @ coef
+        s = max(1.0, np.sqrt(r @ inv @ r / (n - 2)))
+        assert beta[j] == pytest.approx(coef[1], rel=1e-8)
+        assert z[j] == pytest.approx(coef[1] / (s * np.sqrt(info[1, 1])), rel=1e-8)
+    assert 0.0 < p <= 1.0
+
+
+def test_known_lagged_dependence_is_found_at_its_lag():
+    exp = experiment("BCF2")
+    noise = BlockErrorModel(np.full(exp.pv.size, 60.0), 0.7)
+    true_lag, size = 0.4, 400.0  # Pa of extra residual while polymer was injected 0.4 PV earlier
+    rng = np.random.default_rng(11)
+    e = noise.draw(rng, 1)[0] + size * channel_series(exp, "polymer_ppm", exp.pv - true_lag) / 2500.0
+    block = Block("dp", exp.name, np.arange(exp.pv.size), exp.pv, np.zeros(exp.pv.size), exp.slug_index(exp.pv),
+                  noise)
+    found = input_correlations(Layout((block,)), noise.whiten(e), [exp], 0.01, 1.5, STEP, draws=5000)
+    assert {c.channel for c in found} == {"salinity_ppm", "surfactant_ppm", "polymer_ppm"}  # all vary in BCF2
+    top = found[0]
+    assert (top.channel, top.significant) == ("polymer_ppm", True)
+    assert top.lag == pytest.approx(true_lag)
+    assert top.effect == pytest.approx(size, rel=0.25)
+    assert top.lags[-1] == pytest.approx(1.5) and top.lags.size == 16
+
+
+def test_constant_channels_are_left_out():
+    exp = experiment("BCF1")  # 9400 ppm throughout
+    noise = BlockErrorModel(np.ones(exp.pv.size), 0.0)
+    block = Block("oil_cut", exp.name, np.arange(exp.pv.size), exp.pv, np.zeros(exp.pv.size),
+                  exp.slug_index(exp.pv), noise)
+    found = input_correlations(Layout((block,)), np.random.default_rng(0).normal(size=exp.pv.size), [exp], 0.01,
+                               1.0, STEP, draws=500)
+    assert sorted(c.channel for c in found) == ["polymer_ppm", "surfactant_ppm"]
+    assert lag_scan(np.zeros(5), BlockErrorModel(np.ones(5), 0.3), np.full((5, 2), 7.0), 10,
+                    np.random.default_rng(0)) is None
+    with pytest.raises(ParameterError, match="max_lag"):
+        input_correlations(Layout((block,)), np.zeros(exp.pv.size), [exp], 0.01, -1.0, STEP)
+
+
+def test_ar1_noise_is_flagged_at_the_nominal_rate():
+    exp = experiment("BCF2")
+    lags = np.arange(16) * STEP
+    x = lagged(exp, "polymer_ppm", exp.pv, lags)
+    noise = BlockErrorModel(np.full(exp.pv.size, 1.0), 0.85)
+    rng = np.random.default_rng(2025)
+    reps, level = 300, 0.05
+    rejected, naive = 0, 0
+    for _ in range(reps):
+        e = noise.draw(rng, 1)[0]
+        rejected += lag_scan(noise.whiten(e), noise, x, 400, rng)[2] < level
+        # the same residual tested as if it were white (lag 0): the AR(1) correlation is mistaken for a signal
+        xc = x[:, 0] - x[:, 0].mean()
+        naive += 2 * norm.sf(abs(xc @ (e - e.mean())) / np.linalg.norm(xc)) < level
+    assert binom.cdf(rejected, reps, level) > 0.001 and binom.sf(rejected - 1, reps, level) > 0.001
+    assert naive > 4 * reps * level
