@@ -32,7 +32,7 @@ from pathlib import Path
 
 import spflow
 from spflow.plugins.calibration.diagnostics import summary
-from spflow.synthetic import NoiseModel, make_coreflood
+from spflow.synthetic import NoiseModel, write_twins
 
 PIPELINES = Path(__file__).resolve().parent.parent / "pipelines"
 
@@ -41,17 +41,7 @@ TRUTH = {"ALPHAV2": 2.7, "HBNC70": 0.031, "HBNC71": 0.0175, "AD31": 0.42, "GAMHF
          "E2C": 1.75, "E2WC": 2.25, "ALPHAL1": 0.0108}
 
 #: Measurement noise only: random errors as in the default lab model, no systematic offset, drift or dead volume.
-CLEAN_NOISE = NoiseModel(pressure_offset_pa=0.0, pressure_drift_pa_per_pv=0.0, dead_volume_ml=0.0)
-
-
-def write_twins(directory: Path, cells: int, seed: int = 7) -> list[str]:
-    """BCF1-3 clean twins of :data:`TRUTH` as netCDF files in ``directory``; returns their paths."""
-    paths = []
-    for k, experiment in enumerate(("BCF1", "BCF2", "BCF3")):
-        path = directory / f"twin_{experiment}.nc"
-        make_coreflood(experiment, TRUTH, noise=CLEAN_NOISE, seed=seed + k, cells=cells).to_netcdf(path)
-        paths.append(str(path))
-    return paths
+CLEAN_NOISE = NoiseModel.random_only()
 
 
 def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 2, noise_seed: int = 7, **settings) -> dict:
@@ -59,7 +49,7 @@ def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 2, noise_see
     bc = runpy.run_path(str(PIPELINES / "bayesian_calibration.py"))
     data_dir = Path(outdir or tempfile.mkdtemp(prefix="twin_bayesian_"))
     data_dir.mkdir(parents=True, exist_ok=True)
-    observed = write_twins(data_dir, settings.get("cells", 100), noise_seed)
+    observed = write_twins(data_dir, TRUTH, noise=CLEAN_NOISE, seed=noise_seed, cells=settings.get("cells", 100))
     start = time.perf_counter()
     result = spflow.run(bc["pipeline"](observed=observed, **settings), cache=cache, jobs=jobs)
     seconds = time.perf_counter() - start

@@ -30,7 +30,7 @@ import spflow
 from spflow.core.stage import StageContext
 from spflow.plugins.calibration.nsga2_heldout import HeldOutCheck
 from spflow.plugins.forward.stage import Forward
-from spflow.synthetic import NoiseModel, make_coreflood
+from spflow.synthetic import NoiseModel, write_twins
 
 PIPELINES = Path(__file__).resolve().parent.parent / "pipelines"
 
@@ -39,18 +39,7 @@ TRUTH = {"ALPHAV2": 1.2, "HBNC70": 0.036, "HBNC71": 0.0135, "AD31": 0.8, "GAMHF"
          "E2C": 2.1, "E2WC": 2.5, "ALPHAL1": 0.0094}
 
 #: Measurement noise only: random errors as in the default lab model, no systematic offset, drift or dead volume.
-CLEAN_NOISE = NoiseModel(pressure_offset_pa=0.0, pressure_drift_pa_per_pv=0.0, dead_volume_ml=0.0)
-
-
-def write_twins(directory: Path, cells: int, seed: int = 11) -> list[str]:
-    """BCF1-3 clean twins of :data:`TRUTH` as netCDF files in ``directory``; returns their paths."""
-    paths = []
-    for k, experiment in enumerate(("BCF1", "BCF2", "BCF3")):
-        ds = make_coreflood(experiment, TRUTH, noise=CLEAN_NOISE, seed=seed + k, cells=cells)
-        path = directory / f"twin_{experiment}.nc"
-        ds.to_netcdf(path)
-        paths.append(str(path))
-    return paths
+CLEAN_NOISE = NoiseModel.random_only()
 
 
 def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 1, noise_seed: int = 11, **settings) -> dict:
@@ -60,7 +49,7 @@ def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 1, noise_see
     cells = settings.get("cells", 100)
     data_dir = Path(cache) / f"twin_data_{noise_seed}"
     data_dir.mkdir(parents=True, exist_ok=True)
-    paths = write_twins(data_dir, cells, noise_seed)
+    paths = write_twins(data_dir, TRUTH, noise=CLEAN_NOISE, seed=noise_seed, cells=cells)
     p = hm["pipeline"](observed=paths, **settings)
     t0 = time.perf_counter()
     result = spflow.run(p, cache=cache, jobs=jobs)

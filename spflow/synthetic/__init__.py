@@ -7,6 +7,6 @@
 
 from .measurement import measure
 from .noise_model import NoiseModel
-from .twin import make_coreflood
+from .twin import make_coreflood, write_twins
 
-__all__ = ["NoiseModel", "make_coreflood", "measure"]
+__all__ = ["NoiseModel", "make_coreflood", "measure", "write_twins"]

@@ -84,6 +84,11 @@ class NoiseModel:
         return cls(**(base | overrides))
 
     @classmethod
+    def random_only(cls, **overrides) -> NoiseModel:
+        """The default random errors without offset, drift or dead volume: the data of a "clean" synthetic twin."""
+        return cls(**(dict(pressure_offset_pa=0.0, pressure_drift_pa_per_pv=0.0, dead_volume_ml=0.0) | overrides))
+
+    @classmethod
     def from_mapping(cls, values: Mapping) -> NoiseModel:
         """Build from ``{field: value}`` (e.g. a TOML table); unknown fields raise ``ValueError``."""
         known = {f.name for f in fields(cls)}

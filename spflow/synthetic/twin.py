@@ -9,6 +9,7 @@ from ``seed`` (the simulator is deterministic).
 from __future__ import annotations
 
 import numbers
+from pathlib import Path
 
 import xarray as xr
 
@@ -26,6 +27,17 @@ def _spflow_version() -> str:
     import spflow
 
     return spflow.__version__
+
+
+def write_twins(directory, truth_params, *, noise, seed, cells=100, experiments=("BCF1", "BCF2", "BCF3")) -> list[str]:
+    """Twins of the bundled corefloods ``experiments`` as ``<directory>/twin_<name>.nc`` (the k-th with noise seed
+    ``seed + k``), for pipelines that take coreflood files; returns the paths."""
+    paths = []
+    for k, experiment in enumerate(experiments):
+        path = Path(directory) / f"twin_{experiment}.nc"
+        make_coreflood(experiment, truth_params, noise=noise, seed=seed + k, cells=cells).to_netcdf(path)
+        paths.append(str(path))
+    return paths
 
 
 def make_coreflood(schedule, truth_params=None, *, effects=None, noise=None, seed=0, cells=100, pv_step=0.005,

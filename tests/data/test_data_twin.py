@@ -2,8 +2,9 @@
 
 import numpy as np
 import pytest
+import xarray as xr
 
-from spflow.synthetic import NoiseModel, make_coreflood
+from spflow.synthetic import NoiseModel, make_coreflood, write_twins
 
 KW = dict(cells=40, pv_step=0.01)
 
@@ -45,3 +46,16 @@ def test_bad_input_raises_value_error_naming_the_field(kwargs, message):
     args = {"schedule": "BCF1"} | kwargs
     with pytest.raises(ValueError, match=message):
         make_coreflood(args.pop("schedule"), args.pop("truth_params", None), **args, **KW)
+
+
+def test_write_twins_writes_seeded_files_and_random_only_noise_has_no_systematic_error(tmp_path):
+
+
+    noise = NoiseModel.random_only()
+    assert (noise.pressure_offset_pa, noise.pressure_drift_pa_per_pv, noise.dead_volume_ml) == (0.0, 0.0, 0.0)
+    assert noise.pressure_relative == NoiseModel().pressure_relative > 0  # the random errors stay
+    paths = write_twins(tmp_path, {"AD31": 0.8}, noise=noise, seed=5, cells=20, experiments=("BCF1", "BCF2"))
+    assert [p.rsplit("/", 1)[1] for p in paths] == ["twin_BCF1.nc", "twin_BCF2.nc"]
+    for k, (path, experiment) in enumerate(zip(paths, ("BCF1", "BCF2"))):
+        direct = make_coreflood(experiment, {"AD31": 0.8}, noise=noise, seed=5 + k, cells=20)
+        xr.testing.assert_identical(xr.load_dataset(path), direct)
