@@ -155,6 +155,24 @@ def apply_dispersion(st, n, lamd, jd):
 
 
 @njit(cache=True, error_model="numpy")
+def landing_step(dt, t, slug_end, out_pv, k_out, prof_pv, k_prof):
+    """The stable step ``dt`` from time ``t`` shortened to land exactly on the next stop (the slug end, the next
+    output or profile time), and halved when a full step would leave less than half a step before it; returns
+    ``(dt, landed, stop)``: the time is set to ``stop`` exactly after a landed step (no round-off drift)."""
+    next_stop = slug_end
+    if k_out < out_pv.shape[0] and out_pv[k_out] < next_stop:
+        next_stop = out_pv[k_out]
+    if k_prof < prof_pv.shape[0] and prof_pv[k_prof] < next_stop:
+        next_stop = prof_pv[k_prof]
+    remaining = next_stop - t
+    if dt >= remaining:
+        return remaining, True, next_stop
+    if dt > 0.5 * remaining:
+        return 0.5 * remaining, False, next_stop
+    return dt, False, next_stop
+
+
+@njit(cache=True, error_model="numpy")
 def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
@@ -249,20 +267,9 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
                 smax = pr[L.SPEED, i]
             if pr[L.DCAP, i] > dmax:
                 dmax = pr[L.DCAP, i]
-        next_stop = end_pv[slug]
-        if k_out < n_out and out_pv[k_out] < next_stop:
-            next_stop = out_pv[k_out]
-        if k_prof < n_prof and prof_pv[k_prof] < next_stop:
-            next_stop = prof_pv[k_prof]
-        remaining = next_stop - t
         rate = smax / dx + 2.0 * dmax / (dx * dx)
-        dt = cfl / rate if rate > 0.0 else remaining
-        land = False
-        if dt >= remaining:
-            dt = remaining
-            land = True
-        elif dt > 0.5 * remaining:
-            dt = 0.5 * remaining
+        dt, land, next_stop = landing_step(cfl / rate if rate > 0.0 else np.inf, t, end_pv[slug], out_pv, k_out,
+                                           prof_pv, k_prof)
 
         # ---- fluxes and explicit update, halving the step until no component goes negative
         bad = -1

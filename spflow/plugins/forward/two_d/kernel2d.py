@@ -148,19 +148,8 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
         # ---- time step
         while slug < n_slug - 1 and t >= end_pv[slug]:
             slug += 1
-        next_stop = end_pv[slug]
-        if k_out < n_out and out_pv[k_out] < next_stop:
-            next_stop = out_pv[k_out]
-        if k_prof < n_prof and prof_pv[k_prof] < next_stop:
-            next_stop = prof_pv[k_prof]
-        remaining = next_stop - t
-        dt = stable_step(pr, ux, vy, nx, ny, dx, dy, cfl)
-        land = False
-        if dt >= remaining:
-            dt = remaining
-            land = True
-        elif dt > 0.5 * remaining:
-            dt = 0.5 * remaining
+        dt, land, next_stop = KR.landing_step(stable_step(pr, ux, vy, nx, ny, dx, dy, cfl), t, end_pv[slug], out_pv,
+                                              k_out, prof_pv, k_prof)
 
         # ---- explicit advection, halving the step until no component goes negative
         bad = -1
