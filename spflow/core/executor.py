@@ -154,7 +154,7 @@ def _backend_context(backend: str, scheduler: str | None) -> Iterator[None]:
     from distributed import Client
     from joblib import parallel_config
 
-    with Client(scheduler) as _client, parallel_config(backend="dask"):
+    with Client(scheduler), parallel_config(backend="dask"):
         yield
 
 

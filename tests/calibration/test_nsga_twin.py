@@ -10,7 +10,6 @@ asserted here.
 import runpy
 from pathlib import Path
 
-import numpy as np
 from scipy.stats import qmc
 
 from spflow.core.stage import StageContext

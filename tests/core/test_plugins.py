@@ -4,7 +4,6 @@ temporary directory; its stage then appears in ``spflow list`` and runs in a pip
 import os
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import pytest

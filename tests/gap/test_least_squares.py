@@ -51,7 +51,7 @@ def test_recovers_parameters_and_strength():
     assert result.strengths["drift"] == pytest.approx(0.3, rel=1e-4)
     assert result.chi2 < 1e-6
     # the stored Jacobian is d(whitened residual)/d(unit coordinates): analytic derivative, whitened
-    a, b, c = 1.2, 80.0, 0.3
+    a, b = 1.2, 80.0
     dy = np.column_stack([np.exp(-PV * b / 50) * 2.0,                                # dAD31/du = 2
                           -a * PV / 50 * np.exp(-PV * b / 50) * b * np.log(10.0),     # log scale: db/du = b ln 10
                           PV])

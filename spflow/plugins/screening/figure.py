@@ -65,7 +65,7 @@ def plot_total_indices(screening: xr.Dataset, qois: list[str] | None = None, *, 
         ax.set_title(f"{group}\nsd: {spread}", fontsize=9)
         ax.grid(axis="y", alpha=0.3)
     for ax in axes[:, 0]:
-        ax.set_ylabel(rf"total Sobol' index $S^T_i$" if index == "ST" else index)
+        ax.set_ylabel(r"total Sobol' index $S^T_i$" if index == "ST" else index)
     spare = list(axes.flat)[len(groups):]
     handles, labels = axes.flat[0].get_legend_handles_labels()
     if spare:
