@@ -12,10 +12,14 @@ interpolated:
 
 Grid points the data does not cover (before the first sample, after the last tube, or intervals touching a tube
 without a value) are NaN. The output has dims (``experiment``, ``pv``) like one sample of the ``forward`` stage's
-responses, with each experiment's ``total_pv``.
+responses, with each experiment's ``total_pv``. Its JSON attr ``coreflood_attrs`` maps each experiment to its
+coreflood's own attrs (schedule, core data, the ``noise_*`` measurement model when the file has one, provenance), so a
+later stage can rebuild the lab's error model (:func:`spflow.plugins.gap.observed.observed_experiment`).
 """
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 import xarray as xr
@@ -60,6 +64,11 @@ def _tube_average(ds: xr.Dataset, name: str, grid: np.ndarray, step: float) -> n
     return out
 
 
+def _json_attrs(attrs) -> dict:
+    """A coreflood's attrs as JSON values (numpy scalars and arrays to Python numbers and lists)."""
+    return {k: v.tolist() if isinstance(v, (np.generic, np.ndarray)) else v for k, v in attrs.items()}
+
+
 def _point(x: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
     """Linear interpolation of a point series, NaN outside its span."""
     keep = np.isfinite(y)
@@ -83,6 +92,7 @@ def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, st
 
 class Observations(Stage):
     name = "observations"
+    version = "2"
     description = "measured corefloods (bundled names or files) on the simulator's output grid"
     output = OBSERVATIONS
     params = {
@@ -112,8 +122,6 @@ class Observations(Stage):
         return canonical_hash(self._load())
 
     def run(self, ctx: StageContext) -> xr.Dataset:
-        import json
-
         data = self._load()
         names = [str(ds.attrs["experiment"]) for ds in data]
         if len(set(names)) != len(names):
@@ -130,7 +138,8 @@ class Observations(Stage):
             {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1]}) for name, v in values.items()}
             | {"total_pv": ("experiment", totals, {"units": "PV"})},
             coords={"experiment": names, "pv": grid},
-            attrs={"pv_step": step, "sources": " ".join(map(str, self.params["experiments"]))},
+            attrs={"pv_step": step, "sources": " ".join(map(str, self.params["experiments"])),
+                   "coreflood_attrs": json.dumps({n: _json_attrs(ds.attrs) for n, ds in zip(names, data)})},
         )
         out["pv"].attrs["units"] = "PV"
         return out

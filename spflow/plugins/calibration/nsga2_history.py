@@ -11,7 +11,12 @@ population) :class:`CalibrationHistory` stores
 * the whole front (designs and objectives) at the requested snapshot generations and at the last one (Fig. 3.10);
 * every ``n_cross`` generations and at the last generation: the held-out misfits of the front's points from the
   simulator (:class:`~spflow.plugins.calibration.nsga2_heldout.HeldOutCheck`) and σ_loss, their mean. When
-  σ_loss < ``sigma_tol`` the run stops there (Algorithm 3, line 16: "end if N_gen^end reached").
+  σ_loss < ``sigma_tol`` the run stops there (Algorithm 3, line 16: "end if N_gen^end reached");
+* the archive of every design the GA evaluated: pymoo's ``algorithm.off`` when the callback runs, which in
+  generation 1 is the random initial population and later the generation's offspring, so the archive holds
+  ``pop_size + (generations - 1) * pop_size`` points (each generation's offspring are ``pop_size`` new candidates,
+  :mod:`~spflow.plugins.calibration.nsga2_algorithm`). The noise-consistent ranges are built from it
+  (:mod:`~spflow.plugins.calibration.nsga2_confidence`).
 """
 
 from __future__ import annotations
@@ -43,15 +48,22 @@ class CalibrationHistory(Callback):
         self.best: list[np.ndarray] = []
         self.fronts: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.checkpoints: dict[int, np.ndarray] = {}
+        self._evaluated: list[np.ndarray] = []
         self.stop_reason = f"reached the maximum of {generations} generations"
 
     @property
     def last_generation(self) -> int:
         return len(self.n_front)
 
+    @property
+    def archive(self) -> np.ndarray:
+        """Every evaluated design, generation by generation, shape (n_evaluated, n_param)."""
+        return np.concatenate(self._evaluated)
+
     def notify(self, algorithm) -> None:
         generation = algorithm.n_gen
         X, F = algorithm.opt.get("X", "F")
+        self._evaluated.append(algorithm.off.get("X").copy())
         if self.scale is None:
             scale = algorithm.pop.get("F").max(axis=0)
             self.scale = np.where(scale > 0, scale, 1.0)

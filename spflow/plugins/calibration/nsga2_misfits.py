@@ -18,10 +18,11 @@ import numpy as np
 from spflow.core.errors import ParameterError
 from spflow.plugins.calibration.aligned_data import AlignedData
 
-__all__ = ["half_squared_misfit", "relative_l2_misfit"]
+__all__ = ["half_squared_misfit", "relative_l2_misfit", "residuals"]
 
 
-def _residuals(prediction: np.ndarray, aligned: AlignedData, pairs: list[tuple[str, str]]):
+def residuals(prediction: np.ndarray, aligned: AlignedData, pairs: list[tuple[str, str]]):
+    """For each pair in order: the residuals P − y (n_points, n_block) and the observations y (n_block,)."""
     prediction = np.atleast_2d(prediction)
     for variable, experiment in pairs:
         observed = aligned.observed(variable, experiment)
@@ -30,13 +31,13 @@ def _residuals(prediction: np.ndarray, aligned: AlignedData, pairs: list[tuple[s
 
 def half_squared_misfit(prediction: np.ndarray, aligned: AlignedData, pairs: list[tuple[str, str]]) -> np.ndarray:
     """Eq. 3.16 for each pair: ½ Σ_j (P_j − y_j)², shape (n_points, n_pairs), in the variable's unit squared."""
-    return np.stack([0.5 * np.sum(r**2, axis=-1) for r, _ in _residuals(prediction, aligned, pairs)], axis=-1)
+    return np.stack([0.5 * np.sum(r**2, axis=-1) for r, _ in residuals(prediction, aligned, pairs)], axis=-1)
 
 
 def relative_l2_misfit(prediction: np.ndarray, aligned: AlignedData, pairs: list[tuple[str, str]]) -> np.ndarray:
     """‖P − y‖₂ / ‖y‖₂ for each pair, shape (n_points, n_pairs), dimensionless; an all-zero observation raises."""
     out = []
-    for (variable, experiment), (r, y) in zip(pairs, _residuals(prediction, aligned, pairs)):
+    for (variable, experiment), (r, y) in zip(pairs, residuals(prediction, aligned, pairs)):
         scale = np.linalg.norm(y)
         if scale == 0.0:
             raise ParameterError(f"relative misfit of {variable!r} in {experiment!r}: the observations are all zero")

@@ -43,10 +43,14 @@ class SurrogateMisfitProblem(Problem):
         self.aligned = align(surrogate.outputs, observations, self.pairs)
         super().__init__(n_var=len(names), n_obj=len(self.pairs), xl=lower, xu=upper, vtype=float)
 
+    def mean(self, x: np.ndarray) -> np.ndarray:
+        """The surrogate's mean prediction P(ξ) at points ``x`` (n, n_param) in space order: (n, n_output)."""
+        mean, _ = self.surrogate.predict(np.atleast_2d(x)[:, self.order])
+        return mean
+
     def objectives(self, x: np.ndarray) -> np.ndarray:
         """Q(ξ) for points ``x`` (n, n_param) in space order: (n, n_objective)."""
-        mean, _ = self.surrogate.predict(np.atleast_2d(x)[:, self.order])
-        return half_squared_misfit(mean, self.aligned, self.pairs)
+        return half_squared_misfit(self.mean(x), self.aligned, self.pairs)
 
     def _evaluate(self, x, out, *args, **kwargs):
         out["F"] = self.objectives(x)

@@ -15,9 +15,13 @@ on held-out corefloods (thesis §3.6-3.7, Algorithm 3).
 Output (dims ``pareto``, ``param``, ``objective``, ``generation``, ``snapshot``, ``member``, ``checkpoint``,
 ``experiment``): the final Pareto set's ``designs`` and ``objectives``, its held-out misfits, the per-generation
 history (front size, normalised hypervolume, best objectives), the fronts at the ``snapshots`` generations and the
-last one (Fig. 3.10; NaN-padded to the largest front), σ_loss and mean misfits per checkpoint, and the calibrated
-ranges (min/max of the Pareto designs) next to the prior bounds (Fig. 3.14). Units are in each variable's attrs;
-``param_unit`` and ``objective_unit`` coordinates give the per-parameter and per-objective units.
+last one (Fig. 3.10; NaN-padded to the largest front), σ_loss and mean misfits per checkpoint, the calibrated
+ranges (min/max of the Pareto designs) next to the prior bounds (Fig. 3.14), and the noise-consistent ranges
+``confidence_lower/upper``: the extent of the likelihood-ratio region of level ``confidence_level`` under the
+lab's measurement-error model (``confidence_count`` of the evaluated designs lie inside it)
+(:mod:`~spflow.plugins.calibration.nsga2_confidence`; attrs ``confidence_*`` give the level, the χ² threshold, the
+minimum χ², the number of data, the archive size and whether the noise model came from the data). Units are in each
+variable's attrs; ``param_unit`` and ``objective_unit`` coordinates give the per-parameter and per-objective units.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.calibration.nsga2_algorithm import THESIS_GA, thesis_nsga2
+from spflow.plugins.calibration.nsga2_confidence import ConfidenceRegion, NoiseMisfit, check_level
 from spflow.plugins.calibration.nsga2_heldout import HeldOutCheck
 from spflow.plugins.calibration.nsga2_history import HV_REFERENCE, CalibrationHistory
 from spflow.plugins.calibration.nsga2_problem import SurrogateMisfitProblem
@@ -67,9 +72,13 @@ NSGA2_CALIBRATION = DatasetSchema(
         "prior_upper": Variable(("param",), units=_PER_PARAM),
         "calibrated_lower": Variable(("param",), units=_PER_PARAM),
         "calibrated_upper": Variable(("param",), units=_PER_PARAM),
+        "confidence_lower": Variable(("param",), units=_PER_PARAM),
+        "confidence_upper": Variable(("param",), units=_PER_PARAM),
+        "confidence_count": Variable((), kind="i", units="1"),
     },
-    attrs=("training", "generations_run", "stop_reason"),
-    doc="NSGA-II history match: Pareto set, history, held-out misfits, calibrated ranges",
+    attrs=("training", "generations_run", "stop_reason", "confidence_level", "confidence_threshold",
+           "confidence_chi2_min", "confidence_n_data", "confidence_noise_model"),
+    doc="NSGA-II history match: Pareto set, history, held-out misfits, calibrated and noise-consistent ranges",
 )
 
 _OBJECTIVE_CHOICES = ["recovery", "dp", "oil_cut"]
@@ -81,7 +90,7 @@ def _squared_unit(unit: str) -> str:
 
 class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
-    version = "1"
+    version = "2"
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
     inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
@@ -108,6 +117,8 @@ class NSGA2Calibration(Stage):
         "effects": Param(dict, {}, doc="forward-model effect strengths of the held-out runs"),
         "cells": Param(int, 100, bounds=(4, 5000), doc="grid cells of the held-out runs"),
         "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="output grid of the held-out runs"),
+        "confidence_level": Param(float, 0.95, bounds=(0.0, 1.0),
+                                  doc="level of the likelihood-ratio region of the noise-consistent ranges, in (0, 1)"),
     }
 
     @classmethod
@@ -128,6 +139,7 @@ class NSGA2Calibration(Stage):
         if any(not isinstance(g, int) for g in p["snapshots"]):
             raise ParameterError(f"stage 'nsga2_calibration' parameter 'snapshots' must list generation numbers "
                                  f">= 1, got {p['snapshots']}")
+        check_level(p["confidence_level"])
         resolve_params(p["fixed"])
         forward_effects.default_registry().resolve(p["effects"])
         self.forward = Forward(experiments=p["held_out"], fixed=p["fixed"], effects=p["effects"], cells=p["cells"],
@@ -141,6 +153,7 @@ class NSGA2Calibration(Stage):
         for bound in (lower, upper):  # the forward model accepts every point of the box (checked before any work)
             resolve_params(dict(p["fixed"], **dict(zip(names, map(float, bound)))))
         problem = SurrogateMisfitProblem(model, observations, names, lower, upper, p["variables"], p["training"])
+        noise = NoiseMisfit(observations, problem.aligned, problem.pairs)
         heldout = HeldOutCheck(self.forward, observations, p["variables"], names)
         history = CalibrationHistory(p["generations"], p["n_cross"], p["sigma_tol"], p["snapshots"],
                                      lambda points: heldout.misfits(ctx, points))
@@ -148,8 +161,33 @@ class NSGA2Calibration(Stage):
                                  crossover_prob=p["crossover_prob"], mutation_prob=p["mutation_prob"],
                                  crossover_eta=p["crossover_eta"], mutation_eta=p["mutation_eta"])
         minimize(problem, algorithm, ("n_gen", p["generations"]), seed=p["seed"], callback=history, verbose=False)
+        region = noise.region(problem.mean, lower, upper, history.archive, p["confidence_level"])
         units = [_squared_unit(model.outputs.units.get(v, "1")) for v in p["variables"]]
-        return self._dataset(history, names, space, units)
+        ds = self._dataset(history, names, space, units)
+        return self._add_confidence(ds, region, noise, len(history.archive))
+
+    @staticmethod
+    def _add_confidence(ds: xr.Dataset, region: ConfidenceRegion, noise: NoiseMisfit, archive_size: int):
+        """``ds`` with the noise-consistent ranges and their definition (attrs ``confidence_*``)."""
+        per_param = {"units": _PER_PARAM}
+        ds = ds.assign(confidence_lower=("param", region.lower, per_param),
+                       confidence_upper=("param", region.upper, per_param),
+                       confidence_count=((), np.int64(region.count), {"units": "1"}))
+        ds.attrs.update({
+            "confidence_level": region.level,
+            "confidence_threshold": region.threshold,
+            "confidence_chi2_min": region.chi2_min,
+            "confidence_n_data": noise.n_data,
+            "confidence_archive_size": archive_size,
+            "confidence_noise_model": "from the data" if noise.noise_from_data else "assumed (default NoiseModel)",
+            "confidence_blocks": " ".join(f"{v}/{e}" for v, e in noise.pairs),
+            "confidence_definition": ("per-parameter extent of {x in the prior box: chi2(x) - min chi2 <= "
+                                      "chi2.ppf(level, n_param)}, chi2 = sum of squared whitened training residuals "
+                                      "under the lab's measurement-error model (constrained optimisation from the "
+                                      "polished minimum, merged with the evaluated designs inside); surrogate error "
+                                      "not included"),
+        })
+        return ds
 
     def _dataset(self, history: CalibrationHistory, names: list[str], space: xr.Dataset,
                  objective_units: list[str]) -> xr.Dataset:

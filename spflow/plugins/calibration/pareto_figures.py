@@ -7,8 +7,10 @@
 * :func:`plot_history_match` — Figs. 3.11-3.13: for one coreflood, pressure drop, cumulative recovery and oil cut of
   the simulator at every Pareto point after the first and after the last generation (shaded min-max envelopes and
   thin lines) against the measured data.
-* :func:`plot_parameter_ranges` — Fig. 3.14: each parameter's prior range (light) and calibrated range (min-max of
-  the final Pareto set, dark), on the prior range scaled to [0, 1]; optionally a known truth (synthetic twins).
+* :func:`plot_parameter_ranges` — Fig. 3.14: each parameter's prior range (light), calibrated range (min-max of
+  the final Pareto set, blue) and noise-consistent range (the likelihood-ratio region of
+  :mod:`~spflow.plugins.calibration.nsga2_confidence`, orange), on the prior range scaled to [0, 1]; optionally a
+  known truth (synthetic twins).
 """
 
 from __future__ import annotations
@@ -114,25 +116,29 @@ def plot_history_match(responses: xr.Dataset, design: xr.Dataset, observations: 
 
 
 def plot_parameter_ranges(calibration: xr.Dataset, path: str | Path, truth: dict[str, float] | None = None) -> Path:
-    """Fig. 3.14: prior vs calibrated range of each parameter on the prior scaled to [0, 1]; returns the PNG path."""
+    """Fig. 3.14: prior, calibrated (Pareto) and noise-consistent range of each parameter on the prior scaled to
+    [0, 1]; returns the PNG path."""
     plt = _pyplot()
     names = [str(n) for n in calibration["param"].values]
     lo, hi = calibration["prior_lower"].values, calibration["prior_upper"].values
-    scaled = [(calibration[v].values - lo) / (hi - lo) for v in ("calibrated_lower", "calibrated_upper")]
-    fig, ax = plt.subplots(figsize=(8, 0.45 * len(names) + 1.5))
+    fig, ax = plt.subplots(figsize=(8, 0.55 * len(names) + 1.7))
     y = np.arange(len(names))[::-1]
-    ax.barh(y, np.ones(len(names)), left=0.0, height=0.6, color="tab:blue", alpha=0.2, label="prior (Table 3.2)")
-    ax.barh(y, np.maximum(scaled[1] - scaled[0], 0.004), left=scaled[0], height=0.6, color="tab:blue",
-            label="calibrated (final Pareto set)")
+    ax.barh(y, np.ones(len(names)), left=0.0, height=0.8, color="tab:blue", alpha=0.15, label="prior (Table 3.2)")
+    level = calibration.attrs["confidence_level"]
+    for kind, offset, color, label in (
+            ("calibrated", 0.18, "tab:blue", "calibrated (final Pareto set)"),
+            ("confidence", -0.18, "tab:orange", f"noise-consistent ({level:.0%} likelihood-ratio region)")):
+        a, b = ((calibration[f"{kind}_{end}"].values - lo) / (hi - lo) for end in ("lower", "upper"))
+        ax.barh(y + offset, np.maximum(b - a, 0.004), left=a, height=0.32, color=color, label=label)
     if truth is not None:
         t = np.array([(truth[n] - a) / (b - a) for n, a, b in zip(names, lo, hi)])
-        ax.plot(t, y, "r|", ms=14, mew=2, label="truth")
+        ax.plot(t, y, "r|", ms=16, mew=2, label="truth")
     units = calibration["param_unit"].values
     ax.set_yticks(y, [f"{n} [{a:.3g}, {b:.3g}] {u}" for n, a, b, u in zip(names, lo, hi, units)], fontsize=8)
     ax.set_xlim(-0.02, 1.02)
     ax.set_xlabel("position in the prior range (0 = lower, 1 = upper bound)")
     ax.set_title("parameter ranges before and after calibration")
-    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

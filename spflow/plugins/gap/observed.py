@@ -5,7 +5,8 @@ Each coreflood (a bundled name, a netCDF or CSV file, or an in-memory Dataset in
 ``LENGTH`` ...), its measurement model (the ``noise_*`` attrs as a :class:`~spflow.synthetic.NoiseModel`; the
 documented lab defaults when the file has none, which the report says), and every measured variable on the
 simulator's output grid (:func:`spflow.plugins.observations.on_simulator_grid`: point values interpolated, tube
-averages volume-averaged, NaN where not measured).
+averages volume-averaged, NaN where not measured). :func:`observed_experiment` rebuilds the same
+:class:`Experiment` from an ``observations`` stage output, which carries each coreflood's attrs.
 """
 
 from __future__ import annotations
@@ -20,11 +21,11 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 from spflow.io import load_coreflood
 from spflow.plugins.forward.schedule import Schedule, as_schedule
-from spflow.plugins.forward.simulate import output_grid
+from spflow.plugins.forward.simulate import common_grid, output_grid
 from spflow.plugins.observations import on_simulator_grid
 from spflow.synthetic import NoiseModel
 
-__all__ = ["Experiment", "load_experiments", "MEASURABLE"]
+__all__ = ["Experiment", "load_experiments", "observed_experiment", "MEASURABLE"]
 
 #: variables a diagnosis can use (the simulator's responses that a lab measures)
 MEASURABLE = ("dp", "oil_cut", "recovery", "c_polymer_out", "c_surfactant_out", "salinity_out")
@@ -58,12 +59,22 @@ class Experiment:
         return np.minimum(np.searchsorted(ends - 1e-9, pv), len(ends) - 1)
 
 
-def _noise(ds: xr.Dataset) -> tuple[NoiseModel, bool]:
-    given = {f.name: float(ds.attrs[f"noise_{f.name}"]) for f in fields(NoiseModel) if f"noise_{f.name}" in ds.attrs}
+def _noise(attrs: Mapping, name: str) -> tuple[NoiseModel, bool]:
+    given = {f.name: float(attrs[f"noise_{f.name}"]) for f in fields(NoiseModel) if f"noise_{f.name}" in attrs}
     try:
         return NoiseModel(**given), len(given) == len(fields(NoiseModel))
     except ValueError as exc:
-        raise ParameterError(f"coreflood {ds.attrs.get('experiment')!r}: measurement model attrs: {exc}") from None
+        raise ParameterError(f"coreflood {name!r}: measurement model attrs: {exc}") from None
+
+
+def _from_attrs(name: str, schedule: Schedule, attrs: Mapping, pv: np.ndarray, pv_step: float,
+                observed: dict[str, np.ndarray]) -> Experiment:
+    """The :class:`Experiment` of coreflood attrs ``attrs`` (core data, ``noise_*``, volumes) and its series."""
+    noise, from_data = _noise(attrs, name)
+    core = {param: float(attrs[attr]) for attr, param in _CORE_ATTRS if attr in attrs}
+    return Experiment(name, schedule, core, noise, from_data, pv, pv_step, observed,
+                      float(attrs["pore_volume_ml"]) if "pore_volume_ml" in attrs else None,
+                      float(attrs["ooip_ml"]) if "ooip_ml" in attrs else None)
 
 
 def _experiment(ds: xr.Dataset, pv_step: float, schedules: Mapping[str, object]) -> Experiment:
@@ -82,11 +93,7 @@ def _experiment(ds: xr.Dataset, pv_step: float, schedules: Mapping[str, object])
     if not present:
         raise ParameterError(f"coreflood {name!r} has none of the variables {list(MEASURABLE)}")
     observed = {v: s for v, s in on_simulator_grid(ds, present, grid, pv_step).items() if np.isfinite(s).any()}
-    noise, from_data = _noise(ds)
-    core = {param: float(ds.attrs[attr]) for attr, param in _CORE_ATTRS if attr in ds.attrs}
-    return Experiment(name, schedule, core, noise, from_data, grid, pv_step, observed,
-                      float(ds.attrs["pore_volume_ml"]) if "pore_volume_ml" in ds.attrs else None,
-                      float(ds.attrs["ooip_ml"]) if "ooip_ml" in ds.attrs else None)
+    return _from_attrs(name, schedule, ds.attrs, grid, pv_step, observed)
 
 
 def load_experiments(sources: Sequence, pv_step: float, schedules: Mapping[str, object] | None = None,
@@ -106,3 +113,27 @@ def load_experiments(sources: Sequence, pv_step: float, schedules: Mapping[str, 
     if len(set(names)) != len(names):
         raise ParameterError(f"experiments must have distinct names (attr 'experiment'), got {names}")
     return out
+
+
+def observed_experiment(observations: xr.Dataset, name: str) -> Experiment:
+    """Experiment ``name`` of an ``observations`` stage output: its series on the experiment's own simulator grid
+    and the schedule, core data and measurement model from the coreflood attrs the stage carries
+    (``coreflood_attrs``). Equal to what :func:`load_experiments` makes of the same file at the same ``pv_step``."""
+    names = [str(e) for e in observations["experiment"].values]
+    if name not in names:
+        raise ParameterError(f"experiment {name!r} is not in the observations; they have {names}")
+    if "coreflood_attrs" not in observations.attrs:
+        raise ParameterError("observations have no 'coreflood_attrs' attr (the measurement model of each coreflood); "
+                             "produce them with the 'observations' stage")
+    attrs = json.loads(observations.attrs["coreflood_attrs"])[name]
+    step = float(observations.attrs["pv_step"])
+    i = names.index(name)
+    _, positions = common_grid(observations["total_pv"].values, step)
+    own = output_grid(float(observations["total_pv"].values[i]), step)
+    observed = {}
+    for v in MEASURABLE:
+        if v in observations:
+            series = observations[v].values[i, positions[i]]
+            if np.isfinite(series).any():
+                observed[v] = series
+    return _from_attrs(name, as_schedule(json.loads(attrs["schedule"])), attrs, own, step, observed)
