@@ -78,11 +78,15 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
         detail = ", ".join(f"{e}/{v} {float(per.sel(experiment=e, objective=v)):.4f}"
                            for e in per["experiment"].values for v in per["objective"].values)
         lines.append(f"generation {int(g)}: sigma_loss = {float(cal['sigma_loss'].sel(checkpoint=g)):.4f} ({detail})")
-    lines.append("parameter   prior range               calibrated range")
+    lines.append(f"parameter   prior range               calibrated (Pareto)       noise-consistent "
+                 f"({cal.attrs['confidence_level']:.0%} likelihood-ratio region)")
     for name in cal["param"].values:
         c = cal.sel(param=name)
         lines.append(f"{name:<10}  [{float(c.prior_lower):<9.4g}, {float(c.prior_upper):<9.4g}]  "
-                     f"[{float(c.calibrated_lower):<9.4g}, {float(c.calibrated_upper):<9.4g}]")
+                     f"[{float(c.calibrated_lower):<9.4g}, {float(c.calibrated_upper):<9.4g}]  "
+                     f"[{float(c.confidence_lower):<9.4g}, {float(c.confidence_upper):<9.4g}]")
+    if "confidence_warning" in cal.attrs:
+        lines.append(f"noise-consistent ranges: {cal.attrs['confidence_warning']}")
     seconds = {node: result.store.record(key).get("seconds") for node, key in result.keys.items()}
     lines.append("node seconds (when computed): " + ", ".join(f"{n} {s:.1f}" for n, s in seconds.items() if s))
     return lines

@@ -3,6 +3,7 @@ region against the analytic confidence ellipsoid of a linear-Gaussian model and 
 measurement model carried by the observations stage, and the stage's new outputs."""
 
 import numpy as np
+import xarray as xr
 import pytest
 from pymoo.core.problem import Problem
 from pymoo.optimize import minimize
@@ -192,3 +193,19 @@ def test_stage_reports_noise_consistent_ranges():
     lo, hi = out["confidence_lower"].values, out["confidence_upper"].values
     assert np.all(out["prior_lower"].values <= lo) and np.all(lo <= hi) and np.all(hi <= out["prior_upper"].values)
     assert out["confidence_lower"].attrs["units"] == out["calibrated_lower"].attrs["units"]
+
+
+def test_a_rejected_model_carries_a_warning():
+    """The goodness-of-fit p-value of the minimum: with 11 data and 9 parameters (2 degrees of freedom) the χ²
+    survival function is exp(-χ²/2); below 0.01 the ranges are flagged as conditional on a rejected model."""
+    from types import SimpleNamespace
+
+    from spflow.plugins.calibration.nsga2_confidence import ConfidenceRegion
+
+    ds = xr.Dataset(coords={"param": [f"p{i}" for i in range(9)]})
+    noise = SimpleNamespace(n_data=11, noise_from_data=True, pairs=[("dp", "BCF1")])
+    for chi2_min, flagged in ((5.0, False), (12.0, True)):
+        region = ConfidenceRegion(np.zeros(9), np.ones(9), 3, 0.95, 16.9, chi2_min)
+        out = NSGA2Calibration._add_confidence(ds, region, noise, 100)
+        assert out.attrs["confidence_fit_pvalue"] == pytest.approx(np.exp(-chi2_min / 2), rel=1e-12)
+        assert ("confidence_warning" in out.attrs) == flagged

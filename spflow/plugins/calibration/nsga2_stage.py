@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+from scipy import stats
 from pymoo.optimize import minimize
 
 from spflow.core.errors import ParameterError
@@ -77,11 +78,13 @@ NSGA2_CALIBRATION = DatasetSchema(
         "confidence_count": Variable((), kind="i", units="1"),
     },
     attrs=("training", "generations_run", "stop_reason", "confidence_level", "confidence_threshold",
-           "confidence_chi2_min", "confidence_n_data", "confidence_noise_model"),
+           "confidence_chi2_min", "confidence_n_data", "confidence_noise_model", "confidence_fit_pvalue"),
     doc="NSGA-II history match: Pareto set, history, held-out misfits, calibrated and noise-consistent ranges",
 )
 
 _OBJECTIVE_CHOICES = ["recovery", "dp", "oil_cut"]
+#: Goodness-of-fit level below which the noise-consistent ranges carry a warning (chi2 test of the minimum).
+_MISFIT_PVALUE = 0.01
 
 
 def _squared_unit(unit: str) -> str:
@@ -170,6 +173,8 @@ class NSGA2Calibration(Stage):
     def _add_confidence(ds: xr.Dataset, region: ConfidenceRegion, noise: NoiseMisfit, archive_size: int):
         """``ds`` with the noise-consistent ranges and their definition (attrs ``confidence_*``)."""
         per_param = {"units": _PER_PARAM}
+        dof = noise.n_data - ds.sizes["param"]
+        fit_pvalue = float(stats.chi2.sf(region.chi2_min, dof)) if dof > 0 else float("nan")
         ds = ds.assign(confidence_lower=("param", region.lower, per_param),
                        confidence_upper=("param", region.upper, per_param),
                        confidence_count=((), np.int64(region.count), {"units": "1"}))
@@ -177,6 +182,7 @@ class NSGA2Calibration(Stage):
             "confidence_level": region.level,
             "confidence_threshold": region.threshold,
             "confidence_chi2_min": region.chi2_min,
+            "confidence_fit_pvalue": fit_pvalue,
             "confidence_n_data": noise.n_data,
             "confidence_archive_size": archive_size,
             "confidence_noise_model": "from the data" if noise.noise_from_data else "assumed (default NoiseModel)",
@@ -187,6 +193,11 @@ class NSGA2Calibration(Stage):
                                       "polished minimum, merged with the evaluated designs inside); surrogate error "
                                       "not included"),
         })
+        if fit_pvalue < _MISFIT_PVALUE:
+            ds.attrs["confidence_warning"] = (
+                f"the calibrated model does not fit the training data within the measurement noise (min chi2 = "
+                f"{region.chi2_min:.4g} for {noise.n_data} data and {ds.sizes['param']} parameters, p = "
+                f"{fit_pvalue:.2g}): the ranges are conditional on a model the data reject (see the gap diagnosis)")
         return ds
 
     def _dataset(self, history: CalibrationHistory, names: list[str], space: xr.Dataset,
