@@ -110,7 +110,17 @@ def region_extent(chi2: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, u
                              f"values for {len(archive)} points")
     width = upper - lower
     to_x = lambda u: lower + np.clip(u, 0.0, 1.0) * width  # noqa: E731
-    grad = lambda u: _gradient(chi2, u, to_x)  # noqa: E731
+    last: dict = {}
+
+    def grad(u):
+        """``_gradient`` at ``u``, remembered for the next call: SLSQP asks for the constraint's value and its
+        Jacobian at the same point one after the other."""
+        key = u.tobytes()
+        if key not in last:
+            last.clear()
+            last[key] = _gradient(chi2, u, to_x)
+        return last[key]
+
     box = [(0.0, 1.0)] * len(lower)
     best_u, best = None, np.inf
     for k in np.argsort(values)[:_STARTS]:
@@ -131,7 +141,7 @@ def region_extent(chi2: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, u
             res = minimize(lambda u: (e @ u, e), best_u, jac=True, method="SLSQP", bounds=box,
                            constraints=[constraint])
             u = np.clip(res.x, 0.0, 1.0)
-            if grad(u)[0] <= limit + _SLACK * threshold:  # SLSQP meets the constraint to ~1e-7
+            if chi2(to_x(u[None, :]))[0] <= limit + _SLACK * threshold:  # SLSQP meets the constraint to ~1e-7
                 ends.append(u[None, :])
     ends = to_x(np.vstack(ends))
     return ConfidenceRegion(ends.min(axis=0), ends.max(axis=0), int(np.sum(values <= limit)), level, threshold,
