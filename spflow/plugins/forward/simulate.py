@@ -52,6 +52,18 @@ def common_grid(totals, pv_step: float) -> tuple[np.ndarray, list[np.ndarray]]:
     return union, [np.searchsorted(union, g) for g in grids]
 
 
+def kernel_arguments(sched, resolved, strengths, pv_step):
+    """``(prm, end_pv, inj, out_pv)`` of ``run_kernel`` for a validated schedule, resolved parameters and effect
+    strengths: the parameter vector, the slug ends (the last one the end of the output grid), the injected
+    concentrations ``inj[4, slugs]`` and the output grid."""
+    arrays = sched.kernel_arrays()
+    inj = np.ascontiguousarray(np.vstack([arrays["c3"], arrays["c4"], arrays["c5"], arrays["c6"]]))
+    out_pv = output_grid(sched.total_pv, pv_step)
+    end_pv = arrays["end_pv"].copy()
+    end_pv[-1] = out_pv[-1]
+    return build_kernel_params(resolved, strengths), end_pv, inj, out_pv
+
+
 def _check_cells(cells):
     if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or not 3 <= cells <= _MAX_CELLS:
         raise ParameterError(f"cells must be an integer in [3, {_MAX_CELLS}], got {cells!r}")
@@ -143,13 +155,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     sched, resolved, strengths, registry, cells, pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
-    arrays = sched.kernel_arrays()
-    inj = np.ascontiguousarray(np.vstack([arrays["c3"], arrays["c4"], arrays["c5"], arrays["c6"]]))
-    out_pv = output_grid(sched.total_pv, pv_step)
-    end_pv = arrays["end_pv"].copy()
-    end_pv[-1] = out_pv[-1]
-    prm = build_kernel_params(resolved, strengths)
-
+    prm, end_pv, inj, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     start = time.perf_counter()
     status, info, n_steps, series, profiles, totals = run_kernel(
         prm, end_pv, inj, out_pv, prof, cells, _SCHEMES[scheme], cfl
