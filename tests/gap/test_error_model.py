@@ -82,3 +82,22 @@ def test_scales_follow_the_measurement_model():
     rec = block_error_model("recovery", exp, np.ones(4))
     assert rec.phi == 1.0
     np.testing.assert_allclose(rec.scale, 0.2 / math.sqrt(12) / (pv_ml * 0.8) * math.sqrt(2))
+
+
+def test_effluent_floor_follows_the_injected_concentration():
+    """An effluent block that stays near zero (polymer held back) is floored at 5 % of the injected
+    concentration times the assay's relative error, not at round-off size."""
+    noise = NoiseModel(concentration_relative=0.03, tube_pv=0.05)
+    data = make_coreflood("BCF1", noise=noise, seed=0, cells=20)
+    exp = load_experiments([data], 0.1)[0]
+    polymer_ppm = max(s.polymer_ppm for s in exp.schedule.slugs)
+    assert polymer_ppm > 0
+    near_zero = np.array([0.0, 1e-12, 3e-9, 2.0])
+    model = block_error_model("c_polymer_out", exp, near_zero)
+    # one 0.1 PV interval averages two 0.05 PV tubes: the assay error of the mean drops by sqrt(2)
+    floor = 0.03 * 0.05 * polymer_ppm / math.sqrt(2)
+    np.testing.assert_allclose(model.scale, floor)
+    assert model.phi == 0.0
+    # a block well above the floor keeps its relative error
+    high = np.array([polymer_ppm, 0.5 * polymer_ppm])
+    np.testing.assert_allclose(block_error_model("c_polymer_out", exp, high).scale, 0.03 * high / math.sqrt(2))

@@ -21,7 +21,10 @@ never from the residuals of any fit (that would let the model error pass as nois
 * ``recovery`` — the cumulative sum of the same readings / OOIP: a random walk with steps of
   ``oil_resolution_ml / sqrt(12) / OOIP_ml * sqrt(pv_step / tube_pv)``. (Its whitened residual is the oil-cut
   residual again: use one of the two in a likelihood, not both.)
-* effluent assays — relative error ``concentration_relative |c_obs|`` (floored at 5 % of the block maximum), white.
+* effluent assays — relative error ``concentration_relative |c_obs|``, white, floored at 5 % of the block maximum
+  or of the largest injected concentration of the species, whichever is larger. The injected floor is the assay's
+  working range: without it a held-out coreflood whose effluent stays near zero (e.g. polymer held back by
+  adsorption) would get a noise scale of round-off size and whitened residuals of 1e12.
 """
 
 from __future__ import annotations
@@ -38,6 +41,8 @@ from spflow.synthetic.core_volumes import ooip_ml, pore_volume_ml
 __all__ = ["BlockErrorModel", "block_error_model"]
 
 _FLOOR = 0.05
+# effluent assay -> the schedule field (ppm) of the injected concentration that sets its floor
+_INJECTED = {"c_polymer_out": "polymer_ppm", "c_surfactant_out": "surfactant_ppm", "salinity_out": "salinity_ppm"}
 
 
 @dataclass(frozen=True)
@@ -89,9 +94,9 @@ class BlockErrorModel:
         return eps * self.scale
 
 
-def _relative(observed: np.ndarray, relative: float) -> np.ndarray:
+def _relative(observed: np.ndarray, relative: float, reference: float = 0.0) -> np.ndarray:
     level = np.abs(observed)
-    return relative * np.maximum(level, _FLOOR * level.max())
+    return relative * np.maximum(level, _FLOOR * max(level.max(), reference))
 
 
 def block_error_model(variable: str, experiment, observed: np.ndarray) -> BlockErrorModel:
@@ -111,7 +116,9 @@ def block_error_model(variable: str, experiment, observed: np.ndarray) -> BlockE
     if variable == "recovery":
         oil_ml = experiment.ooip_ml or ooip_ml(core)
         return BlockErrorModel(np.full(n, reading / oil_ml * math.sqrt(tubes_per_step)), 1.0)
-    if variable in ("c_polymer_out", "c_surfactant_out", "salinity_out"):
-        return BlockErrorModel(_relative(observed, noise.concentration_relative) / math.sqrt(tubes_per_step), 0.0)
+    if variable in _INJECTED:
+        injected = max(getattr(slug, _INJECTED[variable]) for slug in experiment.schedule.slugs)
+        return BlockErrorModel(_relative(observed, noise.concentration_relative, injected)
+                               / math.sqrt(tubes_per_step), 0.0)
     raise ParameterError(f"no error model for variable {variable!r}; allowed dp, oil_cut, recovery, c_polymer_out, "
                          "c_surfactant_out, salinity_out")
