@@ -11,6 +11,10 @@
   ``recovery = cumsum(oil_volume) / OOIP`` at the tube ends — computed from readings, as a lab does;
   assays: polymer and salinity averaged over the tube's water (weights ``1 - oil cut``), surfactant over the whole
   tube (the simulator reports it per total volume), each times ``1 + concentration_relative * N(0, 1)``, kept >= 0.
+  A tube without water has no polymer or salinity assay: NaN (``empty_tubes="missing"``, lab data), or the
+  water-weighted average's limit as the tube's water goes to zero (``empty_tubes="limit"``, predictions compared
+  with data): the simulator's own effluent series averaged over the tube -- it reports, where no water flows, no
+  polymer and the salinity of the outlet cell's water.
 
 Three independent random streams are spawned from ``seed`` (``numpy.random.SeedSequence(seed).spawn(3)``):
 pressure, oil readings, assays — so changing one part of the model does not reshuffle the others.
@@ -33,19 +37,23 @@ __all__ = ["measure"]
 
 #: assay -> whether it is averaged over the tube's water (else over the whole tube)
 _ASSAYS = (("c_polymer_out", True), ("c_surfactant_out", False), ("salinity_out", True))
+_EMPTY_TUBES = ("missing", "limit")
 #: lab-known core data copied into the measured Dataset (attr name, forward-model parameter)
 _CORE_ATTRS = (("core_length_m", "LENGTH"), ("core_diameter_m", "DIAMETER"), ("porosity", "PORO"),
                ("swi", "SWI"), ("qinj_ml_min", "QINJ"))
 
 
 def measure(clean: xr.Dataset, noise: NoiseModel, seed: int, *, experiment: str, source: str,
-            schedule: str | None = None) -> xr.Dataset:
+            schedule: str | None = None, empty_tubes: str = "missing") -> xr.Dataset:
     """Lab-like measurements of ``clean`` (a ``simulate`` result) under ``noise``, reproducible from ``seed``.
 
-    ``schedule`` is the JSON text stored in the ``schedule`` attr (see :func:`spflow.io.format.schedule_json`).
+    ``schedule`` is the JSON text stored in the ``schedule`` attr (see :func:`spflow.io.format.schedule_json`);
+    ``empty_tubes`` (``"missing"`` or ``"limit"``) the per-water assays of tubes without water (module docstring).
     """
     if not isinstance(noise, NoiseModel):
         raise ValueError(f"noise must be a NoiseModel, got {type(noise).__name__}")
+    if empty_tubes not in _EMPTY_TUBES:
+        raise ValueError(f"empty_tubes must be one of {list(_EMPTY_TUBES)}, got {empty_tubes!r}")
     missing = [v for v in ("dp", "oil_cut", *(name for name, _ in _ASSAYS)) if v not in clean]
     missing += [f"param_{p}" for _, p in _CORE_ATTRS if f"param_{p}" not in clean.attrs]
     if missing or "pv" not in clean.coords:
@@ -76,7 +84,8 @@ def measure(clean: xr.Dataset, noise: NoiseModel, seed: int, *, experiment: str,
         c = clean[name].values
         if per_water:
             amount = collected(c * water, c[0])
-            mean = np.where(has_water, amount / np.where(has_water, water_pv, 1.0), np.nan)
+            empty = np.nan if empty_tubes == "missing" else collected(c, c[0]) / noise.tube_pv
+            mean = np.where(has_water, amount / np.where(has_water, water_pv, 1.0), empty)
         else:
             mean = collected(c, c[0]) / noise.tube_pv
         tubes[name] = np.maximum(mean * (1.0 + noise.concentration_relative * assay_error[row]), 0.0)

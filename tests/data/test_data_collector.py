@@ -83,3 +83,26 @@ def test_dead_volume_delays_every_collected_signal_by_whole_tubes():
         ds.attrs["bt"] = ds["pv_tube_end"].values[np.argmax(ds["c_polymer_out"].values > 1650.0)]
     assert late.attrs["bt"] - base.attrs["bt"] == pytest.approx(0.1, abs=1e-9)
     np.testing.assert_array_equal(late["dp"].values, base["dp"].values)  # pressure is not delayed
+
+
+def test_tubes_without_water_have_no_assay_or_its_zero_water_limit():
+    """Before water breakthrough (oil cut 1 at the outlet) a tube holds no water: lab data has no polymer or salinity
+    assay there (NaN); a prediction gets the zero-water limit -- no polymer, the initial brine's salinity."""
+    from spflow.synthetic.measurement import measure
+
+    # connate water at its residual saturation (no trapping-number shift): the water is immobile until the front
+    sim = simulate("BCF1", {"SWI": 0.2, "S1RWC": 0.2}, cells=30, pv_step=0.01,
+                   effects={"capillary_desaturation": 0.0})
+    noise = NoiseModel.exact(tube_pv=0.05)
+    oil_only = sim.oil_cut.values[sim.pv.values <= 0.1]
+    assert np.all(oil_only > 1.0 - 1e-14)  # the premise: the first 0.1 PV is pure oil (to round-off)
+    lab = measure(sim, noise, 0, experiment="BCF1", source="test")
+    pred = measure(sim, noise, 0, experiment="BCF1", source="test", empty_tubes="limit")
+    first = lab.pv_tube.values < 0.1
+    assert np.all(np.isnan(lab.c_polymer_out.values[first])) and np.all(np.isnan(lab.salinity_out.values[first]))
+    np.testing.assert_array_equal(pred.c_polymer_out.values[first], 0.0)
+    np.testing.assert_allclose(pred.salinity_out.values[first], sim.salinity_out.values[0])
+    wet = ~np.isnan(lab.c_polymer_out.values)
+    np.testing.assert_array_equal(pred.c_polymer_out.values[wet], lab.c_polymer_out.values[wet])
+    with pytest.raises(ValueError, match=r"empty_tubes must be one of \['missing', 'limit'\]"):
+        measure(sim, noise, 0, experiment="BCF1", source="test", empty_tubes="zero")

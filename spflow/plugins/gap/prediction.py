@@ -2,7 +2,9 @@
 
 A prediction of an experiment is ``simulate`` (fine PV grid) followed by the *deterministic* part of that
 experiment's measurement model (``spflow.synthetic.measure`` with every random error off: transducer sampling,
-zero offset and drift, outlet dead volume, fraction-collector tubes) and the observations stage's resampling
+zero offset and drift, outlet dead volume, fraction-collector tubes; a tube without water gets its assays' zero-water
+limit, so that a model producing only oil where the lab collected water is still compared, not undefined) and the
+observations stage's resampling
 (:func:`spflow.plugins.observations.on_simulator_grid`). Model and data are then compared like with like: a
 dead volume or a transducer offset that the lab documented is not mistaken for a model gap.
 
@@ -47,7 +49,8 @@ def measured_run(exp: Experiment, params: Mapping[str, float], effects: Mapping[
                        pv_step=min(FINE_PV_STEP, exp.pv_step))
     except SimulationError:
         return None
-    return measure(sim, _deterministic(exp.measurement), 0, experiment=exp.name, source="spflow gap prediction")
+    return measure(sim, _deterministic(exp.measurement), 0, experiment=exp.name, source="spflow gap prediction",
+                   empty_tubes="limit")
 
 
 def _key(params: Mapping[str, float], effects: Mapping[str, float]) -> tuple:
