@@ -323,6 +323,8 @@ TARGETS = {
     "truth_in_set_indistinguishable_any_strength_snr3": (">=", 0.90),
     "mean_set_size_indistinguishable_any_strength_snr3": ("<=", 2.0),
 }
+#: with effluent concentrations in the likelihood the issue asks more of the ranking
+TARGETS_EFFLUENT = {**TARGETS, "top1_snr3": (">=", 0.80)}
 
 
 def _fmt(x, spec=".2f"):
@@ -332,6 +334,7 @@ def _fmt(x, spec=".2f"):
 def _section(records: list[dict], figure: Path, md: Path) -> tuple[list[str], dict]:
     """Markdown lines and the JSON payload of one result set."""
     m = metrics(records)
+    targets = TARGETS_EFFLUENT if set(records[0]["variables"]) > set(SETS["dp_oil"][1]) else TARGETS
     rows, cols, conf = confusion(records)
     pw = power(records)
     _power_figure(pw, figure)
@@ -348,7 +351,7 @@ def _section(records: list[dict], figure: Path, md: Path) -> tuple[list[str], di
     for key, entry in m.items():
         if key in ("cpu_s_per_twin", "forward_runs_per_twin"):
             continue
-        target = TARGETS.get(key)
+        target = targets.get(key)
         value = entry["value"]
         met = "" if target is None or not np.isfinite(value) else \
             ("yes" if (value <= target[1] if target[0] == "<=" else value >= target[1]) else "**no**")
