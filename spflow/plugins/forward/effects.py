@@ -8,9 +8,9 @@ applied by the forward model itself (as parameter scalings or kernel strength sc
 
 Built-ins (meaning of the strength ``s``):
 
-===========================  ==========  ===================================================================
-name                         default     strength
-===========================  ==========  ===================================================================
+============================= ========  ===================================================================
+name                          default   strength
+============================= ========  ===================================================================
 inaccessible_pore_volume     1           IPV fraction scale: EPHI = 1 - s (1 - EPHI) for EPHI3 and EPHI4
 polymer_adsorption           1           Langmuir capacity scale: AD41, AD42 -> s AD41, s AD42 (Eq. 2.16)
 surfactant_adsorption        1           Langmuir capacity scale: AD31, AD32 -> s AD31, s AD32 (Eq. 2.16)
@@ -23,7 +23,10 @@ kinetic_adsorption           0           non-equilibrium degree: rate KADS / s t
                                          s = 0 is instantaneous (equilibrium) adsorption
 capillary_desaturation       1           trapping-parameter scale: T11, T22, T33 -> s T (Eq. 2.12); s = 0
                                          keeps the low-Nc residuals, end points and exponents
-===========================  ==========  ===================================================================
+reversible_polymer_adsorption 0          irreversible -> reversible blend of the polymer adsorption: reversible
+                                         fraction f = ADSREV4 + s (1 - ADSREV4); s = 0 keeps ADSREV4 (default
+                                         0: irreversible in concentration, UTCHEM), s = 1 is fully reversible
+============================= ========  ===================================================================
 """
 
 from __future__ import annotations
@@ -78,6 +81,8 @@ BUILTIN_EFFECTS: tuple[Effect, ...] = (
     Effect("kinetic_adsorption", "first-order (non-equilibrium) adsorption toward the Langmuir value",
            0.0, 0.0, 1.0e3),
     Effect("capillary_desaturation", "trapping-number dependence of residuals and rel-perms", 1.0, 0.0, 10.0),
+    Effect("reversible_polymer_adsorption", "desorption of adsorbed polymer as the concentration falls "
+           "(irreversible -> reversible Langmuir adsorption)", 0.0, 0.0, 1.0),
 )
 
 BUILTIN_NAMES = frozenset(e.name for e in BUILTIN_EFFECTS)

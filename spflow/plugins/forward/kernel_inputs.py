@@ -4,7 +4,7 @@ The kernel cannot take dicts, so the resolved parameters (``parameters.resolve_p
 (``effects.EffectRegistry.resolve``) are packed here into one array, converted to kernel units (SI for lengths,
 permeability, velocity and time; cP for viscosity, mN/m for IFT; UTCHEM units for concentrations). Built-in effects
 are applied here as parameter scalings (adsorption capacity, IPV, dispersivity, trapping parameters, Pc entry
-pressure, salinity exponent, kinetic rate) or passed as strength scalars (shear thinning, permeability reduction).
+pressure, salinity exponent, kinetic rate, reversible adsorption fraction) or passed as strength scalars (shear thinning, permeability reduction).
 The index constants are module-level integers, which numba freezes as compile-time constants.
 """
 
@@ -34,7 +34,9 @@ AD31, AD32, B3D, AD41, AD42, B4D, KADS = range(69, 76)
 # --- dispersion (PV units: alpha_l / L) and diffusion, capillary pressure ---
 ALPHA_D = 76  # 76, 77, 78
 DMOL, PC0, EPC0 = 79, 80, 81
-N_KERNEL_PARAMS = 82
+# --- reversible fraction of the polymer adsorption (0: irreversible in concentration) ---
+REV4 = 82
+N_KERNEL_PARAMS = 83
 # rows of the per-slug flow array (``slug_flow``)
 FLOW_UT, FLOW_T_PV = 0, 1
 
@@ -103,6 +105,7 @@ def build_kernel_params(p: dict[str, float], s: dict[str, float]) -> np.ndarray:
     k[B4D] = p["B4D"]
     kin = s["kinetic_adsorption"]
     k[KADS] = p["KADS"] / kin if kin > 0.0 else 0.0  # 0 = equilibrium adsorption
+    k[REV4] = p["ADSREV4"] + s["reversible_polymer_adsorption"] * (1.0 - p["ADSREV4"])
 
     k[DMOL] = s["dispersion"] * p["DMOL"]
     k[PC0] = s["capillary_pressure"] * p["CPC0"]
