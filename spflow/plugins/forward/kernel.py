@@ -189,10 +189,18 @@ def landing_step(dt, t, slug_end, prof_pv, k_prof):
 
 
 @njit(cache=True, error_model="numpy")
-def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
+def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
+    ``flow[2, slugs]`` = Darcy velocity (m/s) and time per PV (s) of each slug (``kernel_inputs.slug_flow``);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
-    profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number."""
+    profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number.
+
+    Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
+    so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
+    adsorption step see it; records at a slug end hold the ending slug's values (the left limit)."""
+    prm = prm.copy()
+    prm[K.UT] = flow[K.FLOW_UT, 0]
+    prm[K.T_PV] = flow[K.FLOW_T_PV, 0]
     n_out = out_pv.shape[0]
     n_prof = prof_pv.shape[0]
     n_slug = end_pv.shape[0]
@@ -275,6 +283,16 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
         while slug < n_slug - 1 and t >= end_pv[slug]:
             slug += 1
             ramp = 0.0
+        if flow[K.FLOW_UT, slug] != prm[K.UT]:
+            # a rate step: the new slug's velocity, and the local physics again at it (dt_s = 0: no kinetic
+            # adsorption time passes); the outputs inside the next step start from the new rate's dp
+            prm[K.UT] = flow[K.FLOW_UT, slug]
+            prm[K.T_PV] = flow[K.FLOW_T_PV, slug]
+            k_over_ul = prm[K.PERM_M2] / (prm[K.UT] * prm[K.LENGTH])
+            status = _properties(st, pr, prm, n, 0.0, info, t)
+            if status != L.OK:
+                break
+            dp_now = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
         smax = 0.0
         dmax = 0.0
         for i in range(n):
