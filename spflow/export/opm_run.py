@@ -5,8 +5,8 @@
 (:func:`summary_to_coreflood`): the pressure series ``dp`` (Pa) = injector BHP - producer BHP at the end of every
 report step, and one effluent "tube" per report step with the oil cut, the recovery (cumulative oil / OOIP at the
 tube's end, OOIP = first FOIP + FOPT), the oil volume (ml at core scale) and the polymer concentration of the
-produced water (ppm, tube average). The injected PV is time / (time of one PV) -- the injector meets its rate
-throughout (its BHP limit is far above any core pressure).
+produced water (ppm, tube average). The injected PV is the injected water volume FWIT over the pore volume (OPM
+rounds report-step lengths to whole seconds, so time / (time of one PV) would be off by up to 0.3 % of a step).
 """
 
 from __future__ import annotations
@@ -53,10 +53,10 @@ def flow_executable() -> str:
 
 def summary_to_coreflood(summary: dict[str, np.ndarray], deck: OpmDeck, experiment: str | None = None):
     """The coreflood Dataset (``spflow.io.format``) of an OPM summary of ``deck`` (one row per report step)."""
-    for key in ("TIME", "FOPT", "FWPT", "FOIP", "WBHP:INJ", "WBHP:PROD"):
+    for key in ("FWIT", "FOPT", "FWPT", "FOIP", "WBHP:INJ", "WBHP:PROD"):
         if key not in summary:
             raise OpmRunError(f"{deck.path}: the OPM summary has no vector {key!r}")
-    pv_end = summary["TIME"] / deck.pv_time_days
+    pv_end = summary["FWIT"] / deck.pore_volume_m3
     pv_start = np.concatenate([[0.0], pv_end[:-1]])
     fopt = summary["FOPT"]
     fwpt = summary["FWPT"]
