@@ -61,6 +61,8 @@ class OpmDeck:
     tables: OpmTables
     notes: list[str] = field(default_factory=list)
     experiment: str = "custom"
+    params: dict[str, float] = field(default_factory=dict)  # the resolved forward-model parameters
+    schedule: object = None  # the validated Schedule
 
 
 def _fmt(x: float) -> str:
@@ -221,4 +223,5 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(out))
     return OpmDeck(path=path, cells=cells, area_scale=area_scale, pore_volume_m3=pore_volume, rate_m3_day=rate,
-                   pv_time_days=t_pv, report_pv=report_pv, tables=tables, notes=notes, experiment=sched.name)
+                   pv_time_days=t_pv, report_pv=report_pv, tables=tables, notes=notes, experiment=sched.name,
+                   params=dict(p), schedule=sched)
