@@ -11,9 +11,11 @@ caller passes ``approximate=True``. Shear thinning (PLYSHLOG) is not mapped yet:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.forward import units
 
 __all__ = ["Mechanism", "check_mechanisms", "refuse_or_note", "OpmExportError"]
 
@@ -55,6 +57,12 @@ def check_mechanisms(sched, p: dict[str, float], s: dict[str, float]) -> list[Me
                 "salinity_dependence", f"the slugs inject {len(sal)} salinities {sal} ppm and the polymer viscosity "
                 "depends on salinity (C_SEP^SSLOPE, Eq. 2.2); PLYVISC holds one salinity",
                 f"PLYVISC at the salinity of the first polymer slug ({poly[0]:g} ppm) everywhere"))
+        anions, divalent = units.tds_ppm_to_anions(poly[0]), units.tds_ppm_to_divalent(poly[0])
+        if not (math.isclose(p["C50"], anions, rel_tol=1e-6) and math.isclose(p["C60"], divalent, rel_tol=1e-6)):
+            found.append(Mechanism(
+                "connate_salinity", f"the connate brine (C50 = {p['C50']:g}, C60 = {p['C60']:g} meq/ml) differs from "
+                f"the polymer slugs' brine ({anions:.4g}, {divalent:.4g} meq/ml at {poly[0]:g} ppm); polymer meeting "
+                "connate water sees another viscosity in spflow", "the polymer slugs' salinity everywhere"))
     if has_polymer and s["shear_thinning"] > 0.0:
         found.append(Mechanism(
             "shear_thinning", f"effect shear_thinning = {s['shear_thinning']:g} (Meter law, Eq. 2.4); the export does "

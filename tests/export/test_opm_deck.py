@@ -21,6 +21,7 @@ PARAMS = {"S1RWC": 0.22, "S2RWC": 0.28, "P1RWC": 0.15, "P2RWC": 0.7, "E1WC": 2.5
           "AP1": 12.0, "AP2": 40.0, "AP3": 155.0, "SSLOPE": -0.6, "BETAP": 3.0, "AD41": 5.0, "AD42": 2.0,
           "B4D": 80.0, "BRK": 80.0, "CRK": 0.05, "EPHI4": 0.9, "PERM": 500.0, "PORO": 0.21}
 SALINITY = 12000.0
+PARAMS |= {"C50": SALINITY * 0.145 / 9400.0, "C60": SALINITY * 0.0097 / 9400.0}  # connate brine = injected brine
 SCHED = Schedule((Slug("W", 0.4, SALINITY), Slug("P", 0.8, SALINITY, 0.0, 1500.0), Slug("EWF", 0.6, SALINITY)),
                  "deck-test")
 
@@ -151,6 +152,11 @@ def test_surfactant_and_salinity_changes_are_refused_or_approximated(tmp_path, c
     assert "APPROXIMATION surfactant" in printed and "APPROXIMATION salinity_dependence" in printed
     assert any("surfactant dropped" in n for n in deck.notes)
     assert "APPROXIMATION surfactant" in deck.path.read_text()
+
+
+def test_connate_brine_of_another_salinity_is_refused(tmp_path):
+    with pytest.raises(OpmExportError, match="connate_salinity"):
+        write_opm_deck(tmp_path / "C.DATA", SCHED, PARAMS | {"C50": 0.3}, OFF, log=lambda m: None)
 
 
 def test_rrf_without_adsorption_is_refused(tmp_path):
