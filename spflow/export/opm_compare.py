@@ -66,7 +66,8 @@ def comparison_table(opm: xr.Dataset, ref: xr.Dataset, sched) -> list[dict]:
         float(opm["recovery"].values[worst]), float(rec_ref[worst]))
     top = max(s.polymer_ppm for s in sched.slugs)
     if top > 0.0:
-        row(f"polymer effluent midpoint ({0.5 * top:g} ppm)", "PV", _midpoint(opm, 0.5 * top), _midpoint(ref, 0.5 * top))
+        half = 0.5 * top
+        row(f"polymer effluent midpoint ({half:g} ppm)", "PV", _midpoint(opm, half), _midpoint(ref, half))
     end = 0.0
     for slug in sched.slugs:
         end += slug.pv

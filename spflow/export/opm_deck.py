@@ -112,10 +112,11 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     """Write the OPM Flow deck of one coreflood to ``path`` (a ``.DATA`` file; its directory is created).
 
     ``schedule``, ``params`` and ``effects`` are those of :func:`spflow.simulate`. ``area_scale`` multiplies the
-    core cross-section and the rate (default: a ``DEFAULT_AREA_M2`` = 1e4 m2 cross-section); ``pv_step`` is the report (and summary)
-    interval in PV; ``rock_density`` (kg/m3) converts the adsorption to OPM's kg/kg rock. Mechanisms OPM cannot
-    express raise :class:`~.opm_mechanisms.OpmExportError` (a ``ParameterError``) naming them, unless
-    ``approximate`` -- then each approximation is printed through ``log`` and kept in ``OpmDeck.notes``.
+    core cross-section and the rate (default: a ``DEFAULT_AREA_M2`` = 1e4 m2 cross-section); ``pv_step`` is the
+    report (and summary) interval in PV; ``rock_density`` (kg/m3) converts the adsorption to OPM's kg/kg rock.
+    Mechanisms OPM cannot express raise :class:`~.opm_mechanisms.OpmExportError` (a ``ParameterError``) naming
+    them, unless ``approximate`` -- then each approximation is printed through ``log`` and kept in
+    ``OpmDeck.notes``.
     """
     if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or not 3 <= cells <= 100000:
         raise ParameterError(f"cells must be an integer in [3, 100000], got {cells!r}")
@@ -127,8 +128,8 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     notes = refuse_or_note(found, approximate, log)
     if foreign:
         if not approximate:
-            raise ParameterError(f"effects {foreign} are plugin effects with non-zero strength; OPM Flow cannot express "
-                                 "them (set their strength to 0 or pass approximate=True)")
+            raise ParameterError(f"effects {foreign} are plugin effects with non-zero strength; OPM Flow cannot "
+                                 "express them (set their strength to 0 or pass approximate=True)")
         notes.append(f"APPROXIMATION plugin effects {foreign} dropped")
         log(notes[-1])
     tables = opm_tables(sched, p, s, rock_density=rock_density, swof_nodes=swof_nodes, polymer_nodes=polymer_nodes)
@@ -154,6 +155,7 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     pressure = _initial_pressure(p, tables, x, length)
     half_block_cf = DARCY_METRIC * p["PERM"] * area / (0.5 * dx)
     steps, report_pv = _report_steps(sched, pv_step)
+    has_polymer = any(sl.polymer_ppm > 0.0 for sl in sched.slugs)
 
     out = []
     w = out.append
@@ -162,7 +164,6 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
         w(f"-- {note}\n")
     w("RUNSPEC\nTITLE\n  spflow coreflood {}\n".format(sched.name))
     w(f"DIMENS\n  {cells} 1 1 /\nOIL\nWATER\n")
-    has_polymer = any(sl.polymer_ppm > 0.0 for sl in sched.slugs)
     w("POLYMER\n")
     w("METRIC\n")
     n_sat = tables.swof.shape[0]

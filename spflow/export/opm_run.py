@@ -135,7 +135,8 @@ def summary_to_coreflood(summary: dict[str, np.ndarray], deck: OpmDeck, experime
 
 def run_opm(deck: OpmDeck, workdir=None, *, form: str = "coreflood", extra_options=(), timeout_s: float = 3600.0):
     """Run ``flow`` on ``deck`` (in ``workdir``, default a temporary directory removed afterwards) and return its
-    coreflood Dataset (``form="coreflood"``) or its ``simulate()``-like series (``form="series"``). :class:`OpmNotFoundError` if ``flow`` is absent, :class:`OpmRunError` if it fails (with the
+    coreflood Dataset (``form="coreflood"``) or its ``simulate()``-like series (``form="series"``).
+    :class:`OpmNotFoundError` if ``flow`` is absent, :class:`OpmRunError` if it fails (with the
     tail of its output)."""
     if form not in ("coreflood", "series"):
         raise ParameterError(f"form must be 'coreflood' or 'series', got {form!r}")
