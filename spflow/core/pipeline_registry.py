@@ -25,14 +25,15 @@ import importlib.metadata
 import os
 import runpy
 import sys
-from dataclasses import dataclass, field
+from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from .errors import SpflowError
 
 __all__ = ["ENTRY_POINT_GROUP", "LOCAL_DIR", "PipelineInfo", "LoadedPipeline", "available_pipelines",
-           "builtin_pipeline_dir", "pipeline_names", "load_pipeline_module"]
+           "builtin_pipeline_dir", "load_pipeline_module"]
 
 #: Entry-point group through which installed packages contribute pipelines (name -> module).
 ENTRY_POINT_GROUP = "spflow.pipelines"
@@ -51,13 +52,12 @@ class PipelineInfo:
     description: str
 
 
-@dataclass
+@dataclass(frozen=True)
 class LoadedPipeline:
     """A pipeline module's namespace and a sentence saying which module was used (and what it took precedence over)."""
 
     namespace: dict[str, Any]
     origin: str
-    shadows: list[str] = field(default_factory=list)
 
 
 def _warn(message: str) -> None:
@@ -115,12 +115,6 @@ def _file_description(path: Path) -> str:
         return f"(unreadable: {type(exc).__name__}: {exc})"
 
 
-def pipeline_names() -> list[str]:
-    """Every name ``spflow run NAME`` accepts (local files, built-ins, plugins), without importing anything."""
-    local, builtin = _module_names(LOCAL_DIR), _module_names(builtin_pipeline_dir())
-    return sorted(set(local) | set(builtin) | set(_plugin_entry_points()))
-
-
 def available_pipelines() -> list[PipelineInfo]:
     """Every pipeline runnable by name, sorted by name, with its origin and description.
 
@@ -146,8 +140,8 @@ def available_pipelines() -> list[PipelineInfo]:
     return [infos[name] for name in sorted(infos)]
 
 
-def _not_found(spec: str) -> SpflowError:
-    names = pipeline_names()
+def _not_found(spec: str, plugins: Iterable[str]) -> SpflowError:
+    names = sorted(set(_module_names(LOCAL_DIR)) | set(_module_names(builtin_pipeline_dir())) | set(plugins))
     close = difflib.get_close_matches(spec, names, n=3)
     hint = f" Did you mean {', '.join(close)}?" if close else ""
     return SpflowError(
@@ -167,15 +161,14 @@ def load_pipeline_module(spec: str) -> LoadedPipeline:
     path = Path(spec)
     if path.suffix == ".py" and path.is_file():
         return LoadedPipeline(runpy.run_path(str(path)), f"file {path}")
-    builtin = builtin_pipeline_dir() / f"{spec}.py"
-    is_builtin = _is_module_name(spec) and "." not in spec and builtin.is_file() and not spec.startswith("_")
+    is_builtin = spec.isidentifier() and not spec.startswith("_") and (builtin_pipeline_dir() / f"{spec}.py").is_file()
     plugins = _plugin_entry_points() if not is_builtin else {}
     local = LOCAL_DIR / f"{spec}.py"
     if local.is_file():
-        shadows = ["the built-in pipeline"] if is_builtin else \
-            [f"the pipeline of plugin {_dist(plugins[spec])}"] if spec in plugins else []
-        origin = f"local file {local}" + (f" (used instead of {shadows[0]} of that name)" if shadows else "")
-        return LoadedPipeline(runpy.run_path(str(local)), origin, shadows)
+        shadowed = ("the built-in pipeline" if is_builtin
+                    else f"the pipeline of plugin {_dist(plugins[spec])}" if spec in plugins else "")
+        origin = f"local file {local}" + (f" (used instead of {shadowed} of that name)" if shadowed else "")
+        return LoadedPipeline(runpy.run_path(str(local)), origin)
     if is_builtin:
         module = importlib.import_module(f"{BUILTIN_PACKAGE}.{spec}")
         return LoadedPipeline(vars(module), f"built-in ({module.__name__})")
@@ -195,4 +188,4 @@ def load_pipeline_module(spec: str) -> LoadedPipeline:
                 raise SpflowError(f"pipeline module {spec!r} failed to import: {exc}") from exc
         else:
             return LoadedPipeline(vars(module), f"module {spec}")
-    raise _not_found(spec)
+    raise _not_found(spec, plugins)
