@@ -108,7 +108,8 @@ def test_a_local_file_wins_over_the_builtin_of_the_same_name(empty, capsys):
 @pytest.fixture
 def plugin_site(empty, monkeypatch):
     """An installed distribution ``fakeplug`` (a dist-info directory on sys.path) contributing three pipelines: a
-    working one, one whose module does not exist, and one that tries to take a built-in's name."""
+    working one, one whose module does not exist, and one that tries to take a built-in's name; and a distribution
+    ``otherplug`` contributing a pipeline under the working one's name."""
     site = empty / "site"
     info = site / "fakeplug-1.0.dist-info"
     info.mkdir(parents=True)
@@ -116,6 +117,10 @@ def plugin_site(empty, monkeypatch):
     (info / "entry_points.txt").write_text("[spflow.pipelines]\ntoyplug = fakeplug_toy\n"
                                            "broken = fakeplug_no_such_module\nworkflow = fakeplug_toy\n")
     (site / "fakeplug_toy.py").write_text(TOY.format(tag="plug"))
+    other = site / "otherplug-2.0.dist-info"
+    other.mkdir()
+    (other / "METADATA").write_text("Metadata-Version: 2.1\nName: otherplug\nVersion: 2.0\n")
+    (other / "entry_points.txt").write_text("[spflow.pipelines]\ntoyplug = otherplug_toy\n")
     monkeypatch.syspath_prepend(str(site))
     monkeypatch.setenv("SPFLOW_DISABLE_PLUGINS", "")
     yield site
@@ -131,6 +136,8 @@ def test_plugin_pipelines_are_listed_and_run_and_a_broken_one_is_skipped(plugin_
     assert not any(line.startswith("  broken ") for line in out)
     assert "pipeline 'broken' of plugin fakeplug 1.0 failed to import (fakeplug_no_such_module)" in err
     assert "pipeline 'workflow' of plugin fakeplug 1.0 ignored: a built-in pipeline has that name" in err
+    assert ("pipeline 'toyplug' is contributed by fakeplug 1.0 and by otherplug 2.0; using the first (fakeplug_toy)"
+            in err)
 
     assert main(["run", "toyplug"]) == 0
     out = capsys.readouterr().out
@@ -149,7 +156,8 @@ def test_disabled_plugins_contribute_no_pipelines(plugin_site, monkeypatch, caps
     monkeypatch.setenv("SPFLOW_DISABLE_PLUGINS", "broken,workflow")
     assert main(["list", "pipelines"]) == 0
     captured = capsys.readouterr()
-    assert "toyplug (plugin fakeplug 1.0)" in captured.out and captured.err == ""
+    assert "toyplug (plugin fakeplug 1.0)" in captured.out
+    assert "broken" not in captured.err and "workflow" not in captured.err and "otherplug 2.0" in captured.err
 
 
 @pytest.mark.parametrize("text, expected", [
