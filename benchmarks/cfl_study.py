@@ -34,7 +34,8 @@ def run(schedule: str, cells: int, courant: float) -> tuple[np.ndarray, int, flo
                                                                        None, 0.5)
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     start = time.process_time()
-    status, info, steps, series, _, totals = run_kernel(prm, end_pv, inj, flow, out_pv, prof, cells, True, courant)
+    status, info, steps, series, _, totals, _ = run_kernel(prm, end_pv, inj, flow, out_pv, prof, cells, True, courant,
+                                                           2**62, np.zeros(1, dtype=np.int64))
     cpu = time.process_time() - start
     if status != 0:
         raise RuntimeError(f"{schedule} at {cells} cells, Courant {courant}: kernel status {status}, info {info}")

@@ -174,8 +174,8 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
     """
     if backend not in BACKENDS:
         raise PipelineError(f"backend must be one of {sorted(BACKENDS)}, got {backend!r}")
-    if not isinstance(jobs, int) or jobs < 1:
-        raise PipelineError(f"jobs must be an integer >= 1, got {jobs!r}")
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise PipelineError(f"jobs must be an integer >= 1 (not a bool), got {jobs!r}")
     plan = _plan(pipeline)
     store = Store(cache)
     selected = _selected(pipeline, until, only)

@@ -216,3 +216,11 @@ def test_add_data_is_content_hashed(toys, cache):
     r3 = spflow.run(spflow.Pipeline("d").add_data("obs", changed).add("s", "toy_scale", inputs={"data": "obs"}),
                     cache=cache)
     assert sorted(r3.executed) == ["obs", "s"]
+
+
+@pytest.mark.parametrize("jobs", [True, False, 0, 1.5, "2"])
+def test_run_rejects_jobs_that_are_not_a_positive_integer(toys, log, cache, jobs):
+    match = r"jobs must be an integer >= 1.*got " + repr(jobs).replace(".", r"\.")
+    with pytest.raises(spflow.PipelineError, match=match):
+        spflow.run(chain(str(log)), cache=cache, jobs=jobs)
+    assert executions(log) == []

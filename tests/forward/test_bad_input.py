@@ -157,3 +157,21 @@ def test_simulation_error_names_time_cell_and_state():
     assert "1.234 PV" in msg and "cell 7 of 20" in msg and "time-step collapse" in msg
     assert "water=0.3" in msg and "S_oleic=0.69" in msg
     assert err.pv == 1.234 and err.cell == 7 and err.state["oil"] == 0.7
+
+
+# --- issue 22 item 8: strings are not numbers, SWI below the residual water saturation ---------------------------
+@pytest.mark.parametrize("value", ["0.5", b"0.5", "nan"])
+def test_string_parameter_is_not_coerced(value):
+    msg = _raises(r"parameter AD31 must be a number", simulate, "BCF1", {"AD31": value})
+    assert "[0, 10]" in msg
+
+
+def test_string_schedule_field_is_not_coerced():
+    _raises(r"slug 0 \('slug0'\): field 'pv' must be a number in \(0, inf\)", simulate,
+            [{"pv": "0.5", "salinity_ppm": 9400.0}])
+
+
+def test_swi_below_residual_water_saturation_names_both_and_the_range():
+    msg = _raises(r"SWI = 0.1 .*below S1RWC = 0.25", resolve_params, {"SWI": 0.1, "S1RWC": 0.25})
+    assert "allowed SWI in [S1RWC, 1] = [0.25, 1]" in msg
+    assert resolve_params({"SWI": 0.25, "S1RWC": 0.25})["SWI"] == 0.25  # equal is the usual connate state

@@ -24,6 +24,7 @@ from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import SPACE
+from spflow.plugins.forward.failures import drop_failed
 from spflow.plugins.forward.schedule import BCF_SCHEDULES
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.observations import OBSERVATIONS
@@ -103,7 +104,8 @@ class PosteriorPredictive(Stage):
         rows = np.sort(rng.choice(theta.shape[0], self.params["draws"], replace=False))
         design = xr.Dataset({"values": (("sample", "param"), theta[rows], {"units": "per-parameter (see space unit)"})},
                             coords={"sample": np.arange(rows.size), "param": names})
-        ensemble = self._forward.run(ctx, design=design)
+        ensemble, kept = drop_failed(self._forward.run(ctx, design=design), "stage 'posterior_predictive'")
+        rows, ensemble = rows[kept], ensemble.drop_vars("failure", errors="ignore")
         noisy = []
         for variable in [str(v) for v in np.unique(posterior["block_variable"].values)] if self.params["noise"] else []:
             if variable not in ensemble:
@@ -116,7 +118,8 @@ class PosteriorPredictive(Stage):
             noisy.append(variable)
         ensemble["theta"] = (("sample", "param"), theta[rows], {"units": "per-parameter (see space unit)"})
         bands = Quantiles(levels=self.params["levels"]).run(ctx, ensemble=ensemble)
-        bands.attrs.update(draws=int(rows.size), band_low=min(self.params["levels"]),
+        bands.attrs.update(draws=int(rows.size), failed_draws=int(self.params["draws"] - rows.size),
+                           band_low=min(self.params["levels"]),
                            band_high=max(self.params["levels"]), noisy_variables=" ".join(noisy))
         if observations is not None:
             self._coverage(bands, observations, noisy)

@@ -11,9 +11,10 @@ __all__ = ["check_number"]
 
 
 def check_number(name: str, value, lower: float, upper: float, *, lower_open: bool = False) -> float:
-    """``float(value)`` if it is a finite number in ``(lower, upper]`` (``[lower, upper]`` unless ``lower_open``)."""
+    """``float(value)`` if it is a finite number (not a string) in ``(lower, upper]`` (``[lower, upper]`` unless
+    ``lower_open``)."""
     rng = f"{'(' if lower_open else '['}{lower:g}, {upper:g}{')' if math.isinf(upper) else ']'}"
-    if isinstance(value, bool):
+    if isinstance(value, (bool, str, bytes)):  # strings are not coerced
         raise ParameterError(f"{name} must be a number in {rng}, got {value!r}")
     try:
         x = float(value)

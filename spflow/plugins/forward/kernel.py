@@ -21,8 +21,14 @@ Per step (all in pore-volume units, see ``transport``):
 6. backward-Euler dispersion of surfactant, polymer, anions and divalent cations (operator split, conservative),
    the four tridiagonal systems solved in one batched sweep (``transport.solve_dispersion``).
 
-Returns ``(status, info, n_steps, series, profiles, totals)``; ``status`` is a ``state_layout`` error code and
-``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell. ``totals[4, 6]`` holds, per component, the
+Budgets: before each step the loop stops with ``ERR_STEPS`` once ``max_steps`` steps are done and with ``ERR_WALL``
+once ``stop[0]`` is non-zero (set from another thread by ``simulate``'s wall-time watchdog: the kernel releases the
+GIL, numba has no clock); the failing cell reported is the one that limits the next step.
+
+Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status`` is a ``state_layout`` error code and
+``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell; ``stats[N_STATS]`` counts the step
+halvings (``ST_HALVINGS``), the steps whose stable step was set by the capillary-diffusion term rather than the
+wave speed (``ST_CAPILLARY``) and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component, the
 amount in place at the start, injected, produced and in place at the end (PV units), for the mass balance.
 """
 
@@ -41,6 +47,9 @@ from .cell_properties import cell_properties
 P_SW, P_SO, P_SME, P_CP, P_CS, P_SAL, P_PRES, P_ADS3, P_ADS4, P_OIL, P_IFT = range(11)
 N_PROFILE = 11
 N_INFO = 12
+# stats rows
+ST_HALVINGS, ST_CAPILLARY, ST_RAMP = range(3)
+N_STATS = 3
 # dispersion rows
 D_ANION, D_DIVALENT, D_SURF, D_POLY = range(4)
 N_DISP = 4
@@ -188,12 +197,13 @@ def landing_step(dt, t, slug_end, prof_pv, k_prof):
     return dt, False, next_stop
 
 
-@njit(cache=True, error_model="numpy")
-def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl):
+@njit(cache=True, error_model="numpy", nogil=True)
+def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, stop):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
     ``flow[2, slugs]`` = Darcy velocity (m/s) and time per PV (s) of each slug (``kernel_inputs.slug_flow``);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
-    profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number.
+    profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number; ``max_steps`` the step
+budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
@@ -223,6 +233,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl):
     prof = np.zeros((N_PROFILE, n_prof, n))
     totals = np.zeros((4, 6))
     info = np.zeros(N_INFO)
+    stats = np.zeros(N_STATS)
     cum = np.zeros(R.N_CUM)  # cumulative produced amounts (output_records), at t, t_prev and the last output
     cum_prev = np.zeros(R.N_CUM)
     cum_last = np.zeros(R.N_CUM)
@@ -295,13 +306,32 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl):
             dp_now = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
         smax = 0.0
         dmax = 0.0
+        rmax = 0.0
+        limiting = 0
         for i in range(n):
             if pr[L.SPEED, i] > smax:
                 smax = pr[L.SPEED, i]
             if pr[L.DCAP, i] > dmax:
                 dmax = pr[L.DCAP, i]
+            rate_i = pr[L.SPEED, i] / dx + 2.0 * pr[L.DCAP, i] / (dx * dx)
+            if rate_i > rmax:
+                rmax = rate_i
+                limiting = i
+        if steps >= max_steps:
+            _fill_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
+            status = L.ERR_STEPS
+            break
+        if stop[0] != 0:
+            _fill_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
+            status = L.ERR_WALL
+            break
         rate = smax / dx + 2.0 * dmax / (dx * dx)
-        dt, ramp = ramp_step(cfl / rate if rate > 0.0 else np.inf, ramp, dx, cfl)
+        if 2.0 * dmax / dx > smax:
+            stats[ST_CAPILLARY] += 1.0
+        dt_stable = cfl / rate if rate > 0.0 else np.inf
+        dt, ramp = ramp_step(dt_stable, ramp, dx, cfl)
+        if dt < dt_stable:
+            stats[ST_RAMP] += 1.0
         dt, land, next_stop = landing_step(dt, t, end_pv[slug], prof_pv, k_prof)
         t_prev = t
         dp_prev = dp_now
@@ -324,6 +354,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl):
                 break
             dt *= 0.5
             land = False
+            stats[ST_HALVINGS] += 1.0
         if bad >= 0:
             _fill_info(info, t, bad, st, pr, dt)
             status = L.ERR_COLLAPSE
@@ -359,4 +390,4 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl):
     for r in range(6):
         for i in range(n):
             totals[3, r] += st[r, i] * dx
-    return status, info, steps, series, prof, totals
+    return status, info, steps, series, prof, totals, stats

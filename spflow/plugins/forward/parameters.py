@@ -6,8 +6,9 @@ Tables 2.2-2.3; where the thesis is silent a Berea-typical value is chosen. Each
 and 4.1. Dispersivities are in ft, the thesis's unit (Fig. 2.9).
 
 ``resolve_params`` merges user values with the defaults and validates them before any work: unknown names (with
-close-match suggestions), non-numbers, NaN/inf, values outside their bounds and cross-parameter violations raise
-:class:`spflow.core.errors.ParameterError` (a ``ValueError``) naming the parameter and its allowed range.
+close-match suggestions), non-numbers (strings are not coerced), NaN/inf, values outside their bounds and
+cross-parameter violations (among them ``SWI`` below ``S1RWC``) raise :class:`spflow.core.errors.ParameterError` (a
+``ValueError``) naming the parameter and its allowed range.
 """
 
 from __future__ import annotations
@@ -180,7 +181,7 @@ def _unknown(name: str) -> ParameterError:
 
 
 def _check_value(spec: ParameterSpec, value) -> float:
-    if isinstance(value, bool):
+    if isinstance(value, (bool, str, bytes)):  # a string is not coerced: "0.5" is a typing slip, not a number
         raise ParameterError(f"parameter {spec.name} must be a number, got {value!r}; allowed {spec.describe_range()}")
     try:
         x = float(value)
@@ -211,6 +212,10 @@ def _check_cross(p: dict[str, float]) -> None:
         total = sum(p[n] for n in names)
         if not total < 1.0:
             raise ParameterError(f"residual saturations {'+'.join(names)} = {total!r} must sum to < 1")
+    if p["SWI"] < p["S1RWC"]:
+        raise ParameterError(f"parameter SWI = {p['SWI']!r} (initial water saturation) is below S1RWC = "
+                             f"{p['S1RWC']!r} (residual water saturation); allowed SWI in [S1RWC, 1] = "
+                             f"[{p['S1RWC']!r}, 1]")
     if not p["BETA6"] * p["F6S"] < 1.0:
         raise ParameterError(f"BETA6*F6S = {p['BETA6'] * p['F6S']!r} must be < 1 (effective salinity denominator)")
 

@@ -16,7 +16,8 @@ from spflow.core.errors import ParameterError
 from . import effects as E
 from . import state_layout as L
 from .errors import SimulationError
-from .kernel import run_kernel
+from .budgets import resolve_budgets, wall_clock_flag
+from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_RAMP, run_kernel
 from .checks import check_number
 from .kernel_inputs import build_kernel_params, slug_flow
 from .outputs import build_dataset
@@ -103,7 +104,8 @@ def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cf
 
 
 def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv_step=0.01, profiles_at=None,
-             cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None, pressure_solver=None):
+             cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None, pressure_solver=None,
+             max_steps=None, max_wall_s=None):
     """Run one SP coreflood and return an ``xarray.Dataset``.
 
     Parameters
@@ -131,6 +133,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         injected PVs at which to return profiles on (``profile_pv``, ``x``).
     cfl:
         Courant number of the explicit transport step.
+    max_steps, max_wall_s:
+        step and wall-time budgets of the run (1-D only; ``budgets`` module): ``None`` is 50 x the expected steps
+        ``ceil(total_pv * cells * 4 / cfl)`` and 600 s. Exceeding either raises ``SimulationError``.
 
     Returns
     -------
@@ -139,7 +144,10 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ``c_surfactant``, ``salinity``, ``pressure`` (plus ``surfactant_adsorbed``, ``polymer_adsorbed`` and
     ``oil_overall`` for balances, and ``ift``); attrs with the schedule, grid, scheme, every resolved parameter
     (``param_<NAME>``) and effect strength (``effect_<name>``), the per-component relative mass-balance error,
-    ``n_steps`` and ``wall_time_s`` (and ``slug_rate_ml_min``, the rate of every slug, when a slug sets its own).
+    ``n_steps``, ``wall_time_s``, the budgets ``max_steps`` and ``max_wall_s`` and the step-control counts
+    ``n_halvings`` (retried steps), ``n_capillary_limited`` (steps whose stable step the capillary-diffusion limit
+    set) and ``n_ramp_limited`` (steps capped by the ramp after a slug start) (and ``slug_rate_ml_min``, the rate
+    of every slug, when a slug sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
     ``D = C^(C_J) / C_J = a / (1 + b C_J)`` pore volumes with ``a = AD41 + AD42 C_SEP`` and ``b = B4D`` for polymer
@@ -155,22 +163,31 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     if isinstance(cells, (tuple, list)) or any(v is not None for v in two_d.values()):
         from .two_d.simulate2d import simulate2d
 
+        if max_steps is not None or max_wall_s is not None:
+            raise ParameterError("max_steps and max_wall_s are available in 1-D runs only (cells an integer, no "
+                                 "2-D arguments)")
+
         return simulate2d(schedule, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
                           profiles_at=profiles_at, cfl=cfl, **{k: v for k, v in two_d.items() if v is not None})
     sched, resolved, strengths, registry, cells, pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
+    max_steps, max_wall_s = resolve_budgets(max_steps, max_wall_s, sched.total_pv, cells, cfl)
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     start = time.perf_counter()
-    status, info, n_steps, series, profiles, totals = run_kernel(
-        prm, end_pv, inj, flow, out_pv, prof, cells, _SCHEMES[scheme], cfl
-    )
+    with wall_clock_flag(max_wall_s) as stop:
+        status, info, n_steps, series, profiles, totals, stats = run_kernel(
+            prm, end_pv, inj, flow, out_pv, prof, cells, _SCHEMES[scheme], cfl, max_steps, stop
+        )
     wall = time.perf_counter() - start
     if status != L.OK:
-        raise SimulationError(status, info, cells)
+        budget = {L.ERR_STEPS: f"max_steps = {max_steps}", L.ERR_WALL: f"max_wall_s = {max_wall_s:g} s"}
+        raise SimulationError(status, info, cells, budget.get(status))
 
     attrs = {"schedule": sched.name, "cells": cells, "scheme": scheme, "cfl": cfl, "pv_step": pv_step,
-             "n_steps": int(n_steps), "wall_time_s": wall}
+             "n_steps": int(n_steps), "wall_time_s": wall, "max_steps": max_steps, "max_wall_s": max_wall_s,
+             "n_halvings": int(stats[ST_HALVINGS]), "n_capillary_limited": int(stats[ST_CAPILLARY]),
+             "n_ramp_limited": int(stats[ST_RAMP])}
     if sched.has_rates:
         attrs["slug_rate_ml_min"] = [float(r) for r in sched.rates_ml_min(resolved["QINJ"])]
     attrs.update({f"param_{k}": v for k, v in resolved.items()})

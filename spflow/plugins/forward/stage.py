@@ -5,9 +5,16 @@ Experiments of different total PV share one grid (the union of their own grids, 
 where a point is not theirs (past their end, or another experiment's off-step end point). Samples
 run in parallel with the node's joblib budget; the simulator is deterministic, so serial and parallel runs are
 bit-identical. Every sample's parameters are validated before any simulation starts.
+
+Failure policy: a sample whose run of any experiment raises ``SimulationError`` (a time-step collapse, or a step or
+wall-time budget exhausted, ``budgets``) does not abort the stage: its rows are NaN for every experiment and the
+``failure`` variable (dim ``sample``) holds the reason (``"<experiment>: <message>"``; ``""`` for a sample that
+ran). The stage warns with the count; stages consuming the responses drop failed samples and say how many.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -16,6 +23,8 @@ from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN
+from spflow.plugins.forward.budgets import DEFAULT_MAX_WALL_S
+from spflow.plugins.forward.errors import SimulationError
 from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.schedule import BCF_SCHEDULES, as_schedule
@@ -36,14 +45,24 @@ RESPONSES = DatasetSchema(
     variables={
         name: Variable(("sample", "experiment", "pv"), units=None, allow_nan=True) for name in RESPONSE_UNITS
     }
-    | {"total_pv": Variable(("experiment",), units="PV")},
+    | {"total_pv": Variable(("experiment",), units="PV"),
+       "failure": Variable(("sample",), kind="UO", required=False,
+                           doc="why a sample's run failed (its rows are NaN); empty for a sample that ran")},
     doc="simulated coreflood responses",
 )
 
 
-def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step):
+def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step, max_steps, max_wall_s):
+    """The runs of one sample for every experiment, or the failure reason (str) of the first failing run."""
     params = dict(fixed, **row)
-    return [simulate(exp, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step) for exp in experiments]
+    runs = []
+    for exp in experiments:
+        try:
+            runs.append(simulate(exp, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
+                                 max_steps=max_steps or None, max_wall_s=max_wall_s))
+        except SimulationError as err:
+            return f"{exp}: {err}"
+    return runs
 
 
 class Forward(Stage):
@@ -61,6 +80,10 @@ class Forward(Stage):
         "cells": Param(int, 100, bounds=(4, 5000), doc="grid cells"),
         "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="output grid spacing"),
         "scheme": Param(str, "tvd", choices=["tvd", "upwind"], doc="transport scheme"),
+        "max_steps": Param(int, 0, bounds=(0, None),
+                           doc="step budget of each run; 0: simulate's default (50 x the expected steps)"),
+        "max_wall_s": Param(float, DEFAULT_MAX_WALL_S, bounds=(1e-3, None), unit="s",
+                            doc="wall-time budget of each run"),
     }
 
     @classmethod
@@ -80,7 +103,8 @@ class Forward(Stage):
         rows = self._rows(design)
         for row in rows:  # validate everything before any simulation
             resolve_params(dict(fixed, **row))
-        args = (self.params["cells"], effects, self.params["scheme"], self.params["pv_step"])
+        args = (self.params["cells"], effects, self.params["scheme"], self.params["pv_step"],
+                self.params["max_steps"], self.params["max_wall_s"])
         from joblib import delayed
 
         runs = ctx.parallel()(
@@ -89,14 +113,22 @@ class Forward(Stage):
         total = np.array([as_schedule(e).total_pv for e in experiments])
         grid, positions = common_grid(total, self.params["pv_step"])
         data = {name: np.full((len(rows), len(experiments), grid.size), np.nan) for name in RESPONSE_UNITS}
+        failure = np.array([r if isinstance(r, str) else "" for r in runs], dtype=object)
+        n_failed = int(np.count_nonzero(failure != ""))
+        if n_failed:
+            first = int(np.flatnonzero(failure != "")[0])
+            warnings.warn(f"forward: {n_failed} of {len(rows)} samples failed (NaN rows, reason in the 'failure' "
+                          f"variable); first: sample {first}: {failure[first]}", stacklevel=2)
         for i, sample_runs in enumerate(runs):
+            if isinstance(sample_runs, str):
+                continue
             for j, ds in enumerate(sample_runs):
                 for name in RESPONSE_UNITS:
                     data[name][i, j, positions[j]] = ds[name].values
         out = xr.Dataset(
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
-            | {"total_pv": ("experiment", total, {"units": "PV"})},
+            | {"total_pv": ("experiment", total, {"units": "PV"}), "failure": ("sample", failure.astype(str))},
             coords={"sample": np.arange(len(rows)), "experiment": experiments, "pv": grid},
             attrs={"cells": self.params["cells"], "scheme": self.params["scheme"]},
         )

@@ -27,6 +27,7 @@ from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.effects import default_registry
+from spflow.plugins.forward.failures import reject_failed
 from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.stage import Forward
@@ -126,6 +127,7 @@ class ScreeningStage(Stage):
             coords={"param": names},
         )
         responses = self._forward.run(ctx, design=design)
+        reject_failed(responses, f"stage {self.name!r}")
         y, index = qoi_matrix(responses, list(self.params["qois"]))
         use = np.isin(index.variable, list(self.params["select_on"]))
         parts = []

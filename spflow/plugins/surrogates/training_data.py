@@ -3,7 +3,8 @@ the simulator's responses at the design points.
 
 Every surrogate stage (``pce``, ``adaptive_pce``, the Kriging ones, ``surrogate_validation``) reads its inputs through
 these checks, so a design whose parameters differ from the space's, a responses Dataset of another length or a point
-outside the box fails with one clear message before any fitting.
+outside the box fails with one clear message before any fitting. Samples whose forward runs failed (the
+``forward`` stage's ``failure`` variable) are dropped with a warning saying how many.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.forward.failures import drop_failed
 
 from .outputs import OutputIndex, stack_outputs
 
@@ -51,12 +53,14 @@ def design_points(design: xr.Dataset, names: list[str], lower: np.ndarray, upper
 
 def training_set(space: xr.Dataset, design: xr.Dataset, responses: xr.Dataset, variables: list[str],
                  experiments: list[str] | None) -> TrainingSet:
-    """Points of ``design`` on ``space`` and the ``variables`` of ``responses`` (one row per design sample)."""
+    """Points of ``design`` on ``space`` and the ``variables`` of ``responses`` (one row per design sample whose
+    forward runs did not fail)."""
     names = [str(p) for p in space["param"].values]
     lower, upper = space["lower"].values.astype(float), space["upper"].values.astype(float)
     x = design_points(design, names, lower, upper)
     if responses.sizes.get("sample") != x.shape[0]:
         raise ParameterError(f"surrogate data: the responses have {responses.sizes.get('sample')} samples, the "
                              f"design {x.shape[0]} points")
+    responses, kept = drop_failed(responses, "surrogate data")
     y, outputs = stack_outputs(responses, variables, experiments)
-    return TrainingSet(names, lower, upper, x, y, outputs)
+    return TrainingSet(names, lower, upper, x[kept], y, outputs)

@@ -1,0 +1,160 @@
+"""Stress benchmark of the 1-D forward model (a script, not a test): ``python benchmarks/bench_stress.py [-n 10000]``.
+
+Runs ``N`` random in-bounds draws -- every forward-model parameter inside its declared bounds
+(``parameters.PARAMETERS``) and every effect strength inside its bounds (``effects.BUILTIN_EFFECTS``), a random
+schedule of BCF1-3 and a random grid of 30-100 cells -- with the default step and wall-time budgets, and reports:
+
+- failed runs by reason (a ``SimulationError``: budget exhausted, time-step collapse, ...);
+- NaN/inf values in the series and in the final profiles;
+- bound violations: saturations outside [0, 1], negative concentrations, oil cut outside [0, 1], recovery outside
+  [0, 1], decreasing recovery (all with a 1e-9 round-off allowance);
+- the largest per-component relative mass-balance error;
+- steps and wall times: median, the slowest run's time as a multiple of the median, the largest steps as a multiple
+  of the run's expected steps (``budgets.expected_steps``);
+- the slowest draws with the step-control counts (``n_halvings``, ``n_capillary_limited``, ``n_ramp_limited``) and
+  the parameters that set them apart, to say which mechanism limits their steps.
+
+Draws: a parameter whose positive range spans more than two decades is drawn log-uniformly, one in [0, upper] with
+``upper >= 100`` is 0 with probability 0.2 and else log-uniform in [1e-4 upper, upper], others uniformly; integer
+flags uniformly;
+``SWI`` uniformly in [``S1RWC``, 1]; a draw that violates a cross-parameter rule (``resolve_params``) is redrawn.
+Effect strengths are drawn the same way. Runs go through joblib (``--jobs``, default 2 workers).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import time
+
+import numpy as np
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+from joblib import Parallel, delayed  # noqa: E402
+
+from spflow.core.errors import ParameterError  # noqa: E402
+from spflow.plugins.forward.budgets import expected_steps  # noqa: E402
+from spflow.plugins.forward.effects import BUILTIN_EFFECTS  # noqa: E402
+from spflow.plugins.forward.errors import SimulationError  # noqa: E402
+from spflow.plugins.forward.parameters import PARAMETERS, resolve_params  # noqa: E402
+from spflow.plugins.forward.schedule import BCF_SCHEDULES  # noqa: E402
+from spflow.plugins.forward.simulate import simulate  # noqa: E402
+
+SCHEDULES = ("BCF1", "BCF2", "BCF3")
+TOL = 1.0e-9
+
+
+def _draw(rng, lower, upper, integer=False):
+    if integer:
+        return float(rng.integers(int(lower), int(upper) + 1))
+    if upper <= lower:
+        return float(lower)
+    if lower > 0.0 and upper / lower > 100.0:
+        return float(np.exp(rng.uniform(np.log(lower), np.log(upper))))
+    if lower == 0.0 and upper >= 100.0:
+        if rng.random() < 0.2:
+            return 0.0
+        return float(np.exp(rng.uniform(np.log(1.0e-4 * upper), np.log(upper))))
+    return float(rng.uniform(lower, upper))
+
+
+def draw_case(rng) -> dict:
+    """One in-bounds case: ``{"schedule", "cells", "params", "effects"}``."""
+    while True:
+        params = {s.name: _draw(rng, s.lower, s.upper, s.integer) for s in PARAMETERS}
+        params["SWI"] = float(rng.uniform(params["S1RWC"], 1.0))
+        try:
+            resolve_params(params)
+        except ParameterError:
+            continue
+        break
+    effects = {e.name: _draw(rng, e.lower, e.upper) for e in BUILTIN_EFFECTS}
+    return {"schedule": str(rng.choice(SCHEDULES)), "cells": int(rng.integers(30, 101)), "params": params,
+            "effects": effects}
+
+
+def run_case(case: dict, max_wall_s: float | None = None) -> dict:
+    """Run one case; returns the measures of the module docstring (``failure``: the reason, or ``""``)."""
+    total = BCF_SCHEDULES[case["schedule"]].total_pv
+    out = {"schedule": case["schedule"], "cells": case["cells"], "expected": expected_steps(total, case["cells"], 0.5)}
+    cpu0, start = time.process_time(), time.perf_counter()
+    try:
+        ds = simulate(case["schedule"], case["params"], cells=case["cells"], effects=case["effects"], pv_step=0.01,
+                      profiles_at=[total], max_wall_s=max_wall_s)
+    except SimulationError as err:
+        out.update(failure=err.reason, pv=err.pv, cell=err.cell, wall=time.perf_counter() - start,
+                   cpu=time.process_time() - cpu0, steps=-1)
+        return out
+    wall, cpu = time.perf_counter() - start, time.process_time() - cpu0
+    values = [ds[v].values for v in ds.data_vars]
+    nonfinite = int(sum(np.count_nonzero(~np.isfinite(v)) for v in values))
+    viol = 0
+    for v in ("sw", "so", "sme"):
+        viol += int(np.count_nonzero((ds[v].values < -TOL) | (ds[v].values > 1.0 + TOL)))
+    for v in ("c_polymer", "c_surfactant", "salinity", "c_polymer_out", "c_surfactant_out", "salinity_out"):
+        viol += int(np.count_nonzero(ds[v].values < -TOL))
+    for v in ("oil_cut", "recovery"):
+        viol += int(np.count_nonzero((ds[v].values < -TOL) | (ds[v].values > 1.0 + TOL)))
+    viol += int(np.count_nonzero(np.diff(ds["recovery"].values) < -TOL))
+    balance = max(abs(float(v)) for k, v in ds.attrs.items() if k.startswith("mass_balance_error_"))
+    out.update(failure="", wall=wall, cpu=cpu, steps=int(ds.attrs["n_steps"]), nonfinite=nonfinite, violations=viol,
+               balance=balance, halvings=int(ds.attrs["n_halvings"]), capillary=int(ds.attrs["n_capillary_limited"]),
+               ramp=int(ds.attrs["n_ramp_limited"]))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("-n", type=int, default=10000, help="number of draws")
+    parser.add_argument("--seed", type=int, default=20261126)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--slowest", type=int, default=10, help="slowest draws to list")
+    parser.add_argument("--max-wall", type=float, help="wall-time budget per run (s; default: simulate's)")
+    parser.add_argument("--save", help="write every case and result as JSON lines to this file")
+    args = parser.parse_args()
+    rng = np.random.default_rng(args.seed)
+    cases = [draw_case(rng) for _ in range(args.n)]
+    simulate("BCF1", cells=30)  # compile / load the cached kernel
+    start = time.perf_counter()
+    results = Parallel(n_jobs=args.jobs)(delayed(run_case)(c, args.max_wall) for c in cases)
+    elapsed = time.perf_counter() - start
+    if args.save:
+        with open(args.save, "w") as fh:
+            for c, r in zip(cases, results):
+                fh.write(json.dumps({"case": c, "result": r}) + "\n")
+    ok = [r for r in results if not r["failure"]]
+    failed = [r for r in results if r["failure"]]
+    reasons: dict[str, int] = {}
+    for r in failed:
+        reasons[r["failure"]] = reasons.get(r["failure"], 0) + 1
+    walls = [r["wall"] for r in results]
+    median = statistics.median(walls)
+    print(f"{args.n} draws (BCF1-3, 30-100 cells, parameters and effects in bounds), {args.jobs} workers, "
+          f"{elapsed:.0f} s, load average {os.getloadavg()[0]:.1f}")
+    print(f"{'finished runs':40s} {len(ok)}")
+    print(f"{'failed runs (SimulationError)':40s} {len(failed)}")
+    for reason, count in sorted(reasons.items(), key=lambda kv: -kv[1]):
+        print(f"    {count:6d}  {reason}")
+    print(f"{'NaN/inf values':40s} {sum(r['nonfinite'] for r in ok)}")
+    print(f"{'bound violations':40s} {sum(r['violations'] for r in ok)}")
+    print(f"{'max relative mass-balance error':40s} {max((r['balance'] for r in ok), default=float('nan')):.2e}")
+    print(f"{'runs beyond the budget':40s} {sum('budget' in r['failure'] for r in failed)}")
+    print(f"{'median steps / expected':40s} {statistics.median(r['steps'] / r['expected'] for r in ok):.3f}")
+    print(f"{'max steps / expected':40s} {max(r['steps'] / r['expected'] for r in ok):.2f}")
+    print(f"{'median wall time (s)':40s} {median:.4f}")
+    print(f"{'slowest run wall time / median':40s} {max(walls) / median:.1f}")
+    print(f"{'runs with halvings':40s} {sum(r['halvings'] > 0 for r in ok)}")
+    print(f"{'runs mostly capillary-limited':40s} {sum(r['capillary'] > r['steps'] / 2 for r in ok)}")
+    order = sorted(range(len(results)), key=lambda i: -results[i]["wall"])[: args.slowest]
+    print("slowest draws: index, schedule, cells, steps / expected, halvings, capillary-limited, ramp, wall s, failure")
+    for i in order:
+        r = results[i]
+        print(f"  {i:6d} {r['schedule']} {r['cells']:4d} {r['steps'] / r['expected']:8.2f} {r.get('halvings', -1):8d}"
+              f" {r.get('capillary', -1):8d} {r.get('ramp', -1):6d} {r['wall']:8.2f} {r['failure']}")
+
+
+if __name__ == "__main__":
+    main()
