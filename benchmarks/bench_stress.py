@@ -17,7 +17,9 @@ schedule of BCF1-3 and a random grid of 30-100 cells -- with the default step an
 Draws: a parameter whose positive range spans more than two decades is drawn log-uniformly, one in [0, upper] with
 ``upper >= 100`` is 0 with probability 0.2 and else log-uniform in [1e-4 upper, upper], others uniformly; integer
 flags uniformly;
-``SWI`` uniformly in [``S1RWC``, 1]; a draw that violates a cross-parameter rule (``resolve_params``) is redrawn.
+the cross-parameter rules (``resolve_params``) by construction: the three low-Nc residuals redrawn until their sum
+is < 1, each high-Nc residual uniform in [0, its low-Nc one], CSEL/CSEU sorted, F6S uniform in [0, min(1, 1/BETA6)),
+``SWI`` uniform in [``S1RWC``, 1].
 Effect strengths are drawn the same way. Runs go through joblib (``--jobs``, default 2 workers).
 """
 
@@ -35,7 +37,6 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from joblib import Parallel, delayed  # noqa: E402
 
-from spflow.core.errors import ParameterError  # noqa: E402
 from spflow.plugins.forward.budgets import expected_steps  # noqa: E402
 from spflow.plugins.forward.effects import BUILTIN_EFFECTS  # noqa: E402
 from spflow.plugins.forward.errors import SimulationError  # noqa: E402
@@ -63,14 +64,17 @@ def _draw(rng, lower, upper, integer=False):
 
 def draw_case(rng) -> dict:
     """One in-bounds case: ``{"schedule", "cells", "params", "effects"}``."""
-    while True:
-        params = {s.name: _draw(rng, s.lower, s.upper, s.integer) for s in PARAMETERS}
-        params["SWI"] = float(rng.uniform(params["S1RWC"], 1.0))
-        try:
-            resolve_params(params)
-        except ParameterError:
-            continue
-        break
+    params = {s.name: _draw(rng, s.lower, s.upper, s.integer) for s in PARAMETERS}
+    spec = {s.name: s for s in PARAMETERS}
+    while params["S1RWC"] + params["S2RWC"] + params["S3RWC"] >= 1.0:  # residuals leave a mobile window
+        for name in ("S1RWC", "S2RWC", "S3RWC"):
+            params[name] = _draw(rng, spec[name].lower, spec[name].upper)
+    for high, low in (("S1RC", "S1RWC"), ("S2RC", "S2RWC"), ("S3RC", "S3RWC")):
+        params[high] = float(rng.uniform(0.0, params[low]))
+    params["CSEL"], params["CSEU"] = sorted((params["CSEL"], params["CSEU"]))
+    params["F6S"] = float(rng.uniform(0.0, min(1.0, 0.999 / params["BETA6"]) if params["BETA6"] > 0 else 1.0))
+    params["SWI"] = float(rng.uniform(params["S1RWC"], 1.0))
+    resolve_params(params)  # every rule holds by construction; this raises if one does not
     effects = {e.name: _draw(rng, e.lower, e.upper) for e in BUILTIN_EFFECTS}
     return {"schedule": str(rng.choice(SCHEDULES)), "cells": int(rng.integers(30, 101)), "params": params,
             "effects": effects}
@@ -119,12 +123,14 @@ def main() -> None:
     cases = [draw_case(rng) for _ in range(args.n)]
     simulate("BCF1", cells=30)  # compile / load the cached kernel
     start = time.perf_counter()
-    results = Parallel(n_jobs=args.jobs)(delayed(run_case)(c, args.max_wall) for c in cases)
+    results = []
+    with open(args.save or os.devnull, "w") as fh:  # one JSON line per run as it finishes
+        for i, r in enumerate(Parallel(n_jobs=args.jobs, return_as="generator")(
+                delayed(run_case)(c, args.max_wall) for c in cases)):
+            results.append(r)
+            fh.write(json.dumps({"index": i, "case": cases[i], "result": r}) + "\n")
+            fh.flush()
     elapsed = time.perf_counter() - start
-    if args.save:
-        with open(args.save, "w") as fh:
-            for c, r in zip(cases, results):
-                fh.write(json.dumps({"case": c, "result": r}) + "\n")
     ok = [r for r in results if not r["failure"]]
     failed = [r for r in results if r["failure"]]
     reasons: dict[str, int] = {}

@@ -47,6 +47,7 @@ from spflow.plugins.forward.physics.trapping import (
     residual_saturation,
     trapping_number,
 )
+from spflow.plugins.forward.simulate import simulate
 
 REL = 1e-10
 
@@ -535,6 +536,23 @@ def test_endpoint_interpolation():
     assert endpoint_interpolation(0.3, 1.0, 0.0, 0.3, 0.0) == 1.0
     assert_rel(endpoint_interpolation(2.0, 1.0, 0.1, 0.3, 0.05), 2.0 + (0.2 / 0.25) * (1.0 - 2.0))
     assert endpoint_interpolation(0.3, 1.0, 0.2, 0.2, 0.2) == 0.3
+
+
+def test_endpoint_interpolation_does_not_extrapolate_past_the_high_nc_value():
+    # the solver's residual min(S, S_r) of a conjugate phase below its high-Nc residual (0.05 < 0.1): the end point is
+    # the high-Nc one, not the extrapolation 0.09 + (0.3 - 0.05) / 0.2 * (0.001 - 0.09) = -0.02125 (issue 22: a
+    # negative water mobility stopped runs as "no mobile phase")
+    assert endpoint_interpolation(0.09, 0.001, 0.05, 0.3, 0.1) == pytest.approx(0.001, rel=1e-12)
+    assert endpoint_interpolation(2.0, 3.0, 0.4, 0.3, 0.1) == 2.0  # above the low-Nc residual: the low-Nc value
+
+
+def test_oil_below_its_high_nc_residual_stays_in_place():
+    # connate oil 1 - SWI = 0.09 below both oil residuals (S2RC = 0.1, S2RWC = 0.4): immobile whatever the trapping
+    # number, so brine injection produces no oil and the water end point stays positive (a run, not an error)
+    params = {"SWI": 0.91, "S1RWC": 0.05, "S2RWC": 0.4, "S1RC": 0.04, "S2RC": 0.1, "P1RWC": 0.09, "P1RC": 0.001,
+              "T11": 1e5, "T22": 1e5}
+    ds = simulate([{"pv": 0.5, "salinity_ppm": 9400.0}], params, cells=10, pv_step=0.05)
+    assert np.all(ds["recovery"].values == 0.0) and np.all(ds["dp"].values > 0.0)
 
 
 # ---------------------------------------------------------------- relative permeability and Pc (Eqs. 1.6-1.8)

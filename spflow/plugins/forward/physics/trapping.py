@@ -35,9 +35,13 @@ def endpoint_interpolation(v_low, v_high, s_conj_r, s_conj_low, s_conj_high):
 
     Interpolates an end-point relative permeability (or a Corey exponent) between its low and high trapping-number
     values by the residual saturation ``s_conj_r`` of the conjugate phase l'. If ``s_conj_low == s_conj_high`` the
-    interpolation is undefined and ``v_low`` is returned.
+    interpolation is undefined and ``v_low`` is returned. The fraction is clipped to [0, 1]: the residual the solver
+    uses is ``min(S_l', S_l'r)`` (Eq. 2.12), which falls below ``S_l'r^high`` where the conjugate phase itself is
+    below its high-N_T residual, and Eq. 2.13 must not extrapolate past the high-N_T end point (a negative end point,
+    i.e. a negative mobility, otherwise).
     """
     span = s_conj_low - s_conj_high
     if span == 0.0:
         return v_low
-    return v_low + (s_conj_low - s_conj_r) / span * (v_high - v_low)
+    fraction = min(max((s_conj_low - s_conj_r) / span, 0.0), 1.0)
+    return v_low + fraction * (v_high - v_low)
