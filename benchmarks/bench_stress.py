@@ -80,6 +80,16 @@ def draw_case(rng) -> dict:
             "effects": effects}
 
 
+def capillary_scale(case: dict) -> float:
+    """``D_pc = k p_c0 / (mu_w u L)`` (PV units): the capillary diffusivity scale of a case (0 with Pc off); the
+    explicit capillary step is ``dx^2 / (2 D)``, so the steps grow with ``D_pc * cells^2``."""
+    p = case["params"]
+    pc0 = p["CPC0"] * case["effects"]["capillary_pressure"]
+    area = np.pi * p["DIAMETER"] ** 2 / 4.0
+    u = p["QINJ"] * 1.0e-6 / 60.0 / area
+    return p["PERM"] * 9.869233e-16 * pc0 / (p["VIS1"] * 1.0e-3 * u * p["LENGTH"])
+
+
 def run_case(case: dict, max_wall_s: float | None = None) -> dict:
     """Run one case; returns the measures of the module docstring (``failure``: the reason, or ``""``)."""
     total = BCF_SCHEDULES[case["schedule"]].total_pv
@@ -134,8 +144,9 @@ def main() -> None:
     ok = [r for r in results if not r["failure"]]
     failed = [r for r in results if r["failure"]]
     reasons: dict[str, int] = {}
-    for r in failed:
-        reasons[r["failure"]] = reasons.get(r["failure"], 0) + 1
+    for r in failed:  # by kind, without the budget value
+        kind = r["failure"].split(" [")[0]
+        reasons[kind] = reasons.get(kind, 0) + 1
     walls = [r["wall"] for r in results]
     median = statistics.median(walls)
     print(f"{args.n} draws (BCF1-3, 30-100 cells, parameters and effects in bounds), {args.jobs} workers, "
@@ -155,11 +166,15 @@ def main() -> None:
     print(f"{'runs with halvings':40s} {sum(r['halvings'] > 0 for r in ok)}")
     print(f"{'runs mostly capillary-limited':40s} {sum(r['capillary'] > r['steps'] / 2 for r in ok)}")
     order = sorted(range(len(results)), key=lambda i: -results[i]["wall"])[: args.slowest]
-    print("slowest draws: index, schedule, cells, steps / expected, halvings, capillary-limited, ramp, wall s, failure")
+    print("slowest draws: index, schedule, cells, steps / expected, halvings, capillary-limited steps, ramp-limited "
+          "steps, wall s, capillary diffusivity scale D_pc, VIS2/VIS1, failure")
     for i in order:
         r = results[i]
-        print(f"  {i:6d} {r['schedule']} {r['cells']:4d} {r['steps'] / r['expected']:8.2f} {r.get('halvings', -1):8d}"
-              f" {r.get('capillary', -1):8d} {r.get('ramp', -1):6d} {r['wall']:8.2f} {r['failure']}")
+        ratio = f"{r['steps'] / r['expected']:8.2f}" if r["steps"] > 0 else "       -"
+        print(f"  {i:6d} {r['schedule']} {r['cells']:4d} {ratio} {r.get('halvings', -1):8d}"
+              f" {r.get('capillary', -1):8d} {r.get('ramp', -1):6d} {r['wall']:8.2f}"
+              f" {capillary_scale(cases[i]):9.3g} {cases[i]['params']['VIS2'] / cases[i]['params']['VIS1']:9.3g}"
+              f" {r['failure']}")
 
 
 if __name__ == "__main__":
