@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+import spflow
 from spflow.core.errors import SpflowError
 from spflow.core.stage import StageContext
 from spflow.plugins.forward.failures import drop_failed, reject_failed
@@ -75,3 +76,18 @@ def test_surrogate_training_data_drops_failed_samples():
     np.testing.assert_array_equal(data.x[:, 0], [1.0, 3.0])
     assert data.y.shape[0] == 2 and np.isfinite(data.y).all()
     np.testing.assert_array_equal(data.y[:, 0], [0.0, 2.0])
+
+
+def test_failure_policy_through_a_parallel_pipeline_and_the_cache(tmp_path):
+    easy = simulate("BCF1", {"EPHI4": 1.0}, cells=CELLS, pv_step=0.1)
+    p = spflow.Pipeline("fail").add_data("design", _design([0.2, 1.0]))
+    p.add("sim", "forward", inputs={"design": "design"},
+          params={"experiments": ["BCF1"], "cells": CELLS, "pv_step": 0.1, "max_steps": easy.attrs["n_steps"]})
+    with pytest.warns(UserWarning, match="1 of 2 samples failed"):
+        first = spflow.run(p, cache=tmp_path, jobs=2)["sim"]  # the samples run in loky workers
+    again = spflow.run(p, cache=tmp_path)  # from the store (netCDF)
+    assert "sim" in again.cached and again.executed == []
+    xr.testing.assert_identical(first, again["sim"])
+    assert "step budget" in str(again["sim"]["failure"].values[0]) and str(again["sim"]["failure"].values[1]) == ""
+    assert np.isnan(again["sim"]["dp"].values[0]).all()
+    np.testing.assert_array_equal(again["sim"]["dp"].values[1, 0], easy["dp"].values)
