@@ -35,6 +35,8 @@ from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry
 from spflow.plugins.gap.command import add_parser as add_diagnose_parser
 from spflow.plugins.gap.command import main as diagnose_command
+from spflow.study.command import add_parser as add_study_parsers
+from spflow.study.command import main as study_command
 
 
 def load_pipeline_module(spec: str) -> dict[str, Any]:
@@ -211,13 +213,14 @@ def build_parser() -> argparse.ArgumentParser:
     for p in (p_run, p_status, p_report, p_clean):
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
     add_diagnose_parser(sub)
+    add_study_parsers(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
-               "diagnose": diagnose_command}[args.command]
+               "diagnose": diagnose_command, "init": study_command, "check": study_command}[args.command]
     try:
         return handler(args)
     except SpflowError as exc:
