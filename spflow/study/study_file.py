@@ -72,6 +72,14 @@ def _keys(table, allowed, where: str) -> Mapping:
     return table
 
 
+def _quantity(value, kind: str, where: str) -> tuple[float, str]:
+    """:func:`parse_quantity`, its errors as :class:`StudyError`."""
+    try:
+        return parse_quantity(value, kind, where)
+    except ValueError as exc:
+        raise StudyError(str(exc)) from None
+
+
 def _agree(a: float, b: float) -> bool:
     return abs(a - b) <= _AGREE * max(abs(a), abs(b))
 
@@ -198,7 +206,7 @@ class _StudyReader:
             field = f"core.{key}"
             given = None
             if key in table:
-                given, _ = parse_quantity(table[key], kind, f"{at}: field {field!r}")
+                given, _ = _quantity(table[key], kind, f"{at}: field {field!r}")
                 self._check_bounds(field, attr, given, at)
             value = self._both(field, given, table.get(key), attr, attrs, at, data_where, sources)
             if value is None:
@@ -210,7 +218,7 @@ class _StudyReader:
     def _rate(self, value, attrs, diameter_m, at, data_where, sources) -> float:
         given = None
         if value is not None:
-            given, unit = parse_quantity(value, "rate", f"{at}: field 'rate'")
+            given, unit = _quantity(value, "rate", f"{at}: field 'rate'")
             if unit in VELOCITY_UNITS:
                 given = velocity_to_rate(given, unit, diameter_m)
             self._check_bounds("rate", RATE_ATTR, given, at)
@@ -293,7 +301,7 @@ class _StudyReader:
         for key, kind in FLUID_KEYS.items():
             field = f"fluids.{key}"
             if key in table:
-                value, _ = parse_quantity(table[key], kind, f"{at}: field {field!r}")
+                value, _ = _quantity(table[key], kind, f"{at}: field {field!r}")
                 try:
                     resolve_params({key: value})
                 except ValueError as exc:
