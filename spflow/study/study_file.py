@@ -154,7 +154,7 @@ class _StudyReader:
         core = self._core(table.get("core", {}), ds.attrs, at, data_where, sources)
         core[RATE_ATTR] = self._rate(table.get("rate"), ds.attrs, core["core_diameter_m"], at, data_where, sources)
         self._volumes(core, ds.attrs, at, data_where)
-        schedule = self._schedule(table.get("schedule", FROM_DATA), ds, data.parent, at, data_where, sources)
+        schedule = self._schedule(name, table.get("schedule", FROM_DATA), ds, at, data_where, sources)
         self._length(schedule, ds, at, data_where)
         fluids = self._fluids(name, table.get("fluids", {}), at, fixed, calibrated, sources)
         measurement = self._measurement(name, table.get("measurement", {}), ds.attrs, at, data_where, sources)
@@ -238,7 +238,7 @@ class _StudyReader:
                                      f"(length, diameter, porosity, swi), which gives {expected:.6g} ml; allowed "
                                      f"within {_PORE_VOLUME_AGREE:.0%}")
 
-    def _schedule(self, value, ds, data_dir, at, data_where, sources) -> Schedule:
+    def _schedule(self, name, value, ds, at, data_where, sources) -> Schedule:
         own = None
         if "schedule" in ds.attrs:
             own = as_schedule(json.loads(ds.attrs["schedule"]))
@@ -253,7 +253,7 @@ class _StudyReader:
                 file = Path(value) if Path(value).is_absolute() else self.path.parent / value
                 schedule = read_schedule_file(file)
             elif isinstance(value, list):
-                schedule = as_schedule({"name": "study", "slugs": value})
+                schedule = as_schedule({"name": name, "slugs": value})
             else:
                 schedule = as_schedule(value)
         except ValueError as exc:

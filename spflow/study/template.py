@@ -20,6 +20,7 @@ from spflow.io.metadata import CORE_ATTRS, core_unit
 from spflow.plugins.design.thesis_tables import TABLE_3_2
 from spflow.plugins.forward.effects import default_registry
 from spflow.plugins.forward.parameters import PARAMETERS
+from spflow.synthetic.noise_model import NoiseModel
 
 from .bundled import bundled_study_path
 from .errors import StudyError
@@ -104,7 +105,8 @@ def _experiment(file: Path, ds: xr.Dataset, name: str, role: str, directory: Pat
     lines.append("[experiment.measurement]  # the measurement chain; missing fields take the documented defaults")
     for key in MEASUREMENT_KEYS:
         if key in noise:
-            lines.append(f"# {key} = ...  # {MEASUREMENT_UNITS[key]}; not in the data file")
+            lines.append(f"# {key} = {getattr(NoiseModel(), key)!r}  # {MEASUREMENT_UNITS[key]}; not in the data file: "
+                         "this documented default is taken unless you set it")
         else:
             lines.append(f"# {key}: from the data file ({float(attrs[f'noise_{key}']):g} {MEASUREMENT_UNITS[key]})")
     return lines
