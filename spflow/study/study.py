@@ -96,7 +96,8 @@ class Study:
             core = ", ".join(f"{attr} = {v:.6g} {core_unit(attr)}" for attr, v in e.core.items())
             lines.append(f"  core: {core}; pore volume {e.pore_volume_ml():.4g} ml")
             slugs = ", ".join(f"{s.name} {s.pv:g} PV ({s.salinity_ppm:g}/{s.surfactant_ppm:g}/{s.polymer_ppm:g} ppm "
-                              "TDS/surf./poly.)" for s in e.schedule.slugs)
+                              "TDS/surf./poly." + ("" if s.rate_ml_min is None else f", {s.rate_ml_min:g} ml/min")
+                              + ")" for s in e.schedule.slugs)
             lines.append(f"  schedule {e.schedule.name!r}: {slugs}; total {e.schedule.total_pv:g} PV")
             if e.fluids:
                 lines.append("  fluids: " + ", ".join(f"{k} = {v:g}{_unit([k])}" for k, v in e.fluids.items()))

@@ -270,10 +270,14 @@ class _StudyReader:
     def _same_schedule(self, given: Schedule, own: Schedule, at, data_where):
         same = len(given.slugs) == len(own.slugs) and all(
             math.isclose(getattr(a, f), getattr(b, f), rel_tol=_AGREE, abs_tol=1e-12)
-            for a, b in zip(given.slugs, own.slugs) for f in _SLUG_NUMBERS)
+            for a, b in zip(given.slugs, own.slugs) for f in _SLUG_NUMBERS) and all(
+            (a.rate_ml_min is None) == (b.rate_ml_min is None)
+            and (a.rate_ml_min is None or math.isclose(a.rate_ml_min, b.rate_ml_min, rel_tol=_AGREE))
+            for a, b in zip(given.slugs, own.slugs))
         if not same:
             def text(s):
                 return "; ".join(f"{x.pv:g} PV {x.salinity_ppm:g}/{x.surfactant_ppm:g}/{x.polymer_ppm:g} ppm"
+                                 + ("" if x.rate_ml_min is None else f" at {x.rate_ml_min:g} ml/min")
                                  for x in s.slugs)
             raise StudyError(f"{at}: field 'schedule' is given twice and the schedules disagree: study file "
                              f"[{text(given)}] vs {data_where} attr 'schedule' [{text(own)}]; use schedule = "
