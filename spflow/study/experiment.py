@@ -16,6 +16,8 @@ from spflow.plugins.forward.schedule import Schedule
 from spflow.synthetic.core_volumes import ooip_ml, pore_volume_ml
 from spflow.synthetic.noise_model import NoiseModel
 
+from .errors import StudyError
+
 __all__ = ["Experiment"]
 
 
@@ -26,7 +28,7 @@ class Experiment:
     Attributes:
         name: the experiment's name (unique in the study; the ``experiment`` attr of its observations).
         role: ``"calibration"``, ``"heldout"`` or ``"predict"``.
-        data: absolute path of the data file.
+        data: absolute path of the data file (``None`` for a predict-only experiment without data).
         core: core attrs of :mod:`spflow.io.metadata` (``core_length_m`` ... ``qinj_ml_min``), format units.
         schedule: the injection schedule.
         fluids: forward-model fluid parameters the study gives for this experiment (``VIS2`` ...), model units.
@@ -36,13 +38,13 @@ class Experiment:
 
     name: str
     role: str
-    data: Path
+    data: Path | None
     core: dict[str, float]
     schedule: Schedule
     fluids: dict[str, float]
     measurement: NoiseModel
     sources: dict[str, str]
-    dataset: xr.Dataset = field(repr=False, compare=False)
+    dataset: xr.Dataset | None = field(repr=False, compare=False)
 
     def model_params(self) -> dict[str, float]:
         """Forward-model overrides of this experiment: ``LENGTH``, ``DIAMETER``, ``PORO``, ``PERM``, ``SWI``,
@@ -60,7 +62,10 @@ class Experiment:
     def observations(self) -> xr.Dataset:
         """The coreflood Dataset (:func:`spflow.io.load_coreflood` format) with the study's resolved metadata as
         attrs: ``experiment`` = the study name, the core attrs with units, ``pore_volume_ml``/``ooip_ml`` (from the
-        core where the file has none), the schedule JSON and the measurement chain ``noise_*``."""
+        core where the file has none), the schedule JSON and the measurement chain ``noise_*``. A predict-only
+        experiment without data raises :class:`StudyError`."""
+        if self.dataset is None:
+            raise StudyError(f"experiment {self.name!r} ({self.role}) has no data file: nothing was observed")
         ds = self.dataset.copy()
         attrs = dict(ds.attrs)
         params = self.model_params()
@@ -73,9 +78,9 @@ class Experiment:
         ds.attrs = attrs
         return ds
 
-    def data_digest(self) -> str:
-        """SHA-256 of the data file's bytes (so caching keys see a changed file)."""
-        return hashlib.sha256(self.data.read_bytes()).hexdigest()
+    def data_digest(self) -> str | None:
+        """SHA-256 of the data file's bytes (so caching keys see a changed file); ``None`` without data."""
+        return None if self.data is None else hashlib.sha256(self.data.read_bytes()).hexdigest()
 
     def forward_experiment(self) -> dict:
         """The ``forward`` stage's description of this experiment: ``{"name", "schedule", "params"}``."""
@@ -84,7 +89,8 @@ class Experiment:
 
     def to_dict(self) -> dict:
         """JSON-able content (data file path and digest, every resolved value and its source)."""
-        return {"name": self.name, "role": self.role, "data": str(self.data), "data_sha256": self.data_digest(),
+        return {"name": self.name, "role": self.role, "data": None if self.data is None else str(self.data),
+                "data_sha256": self.data_digest(),
                 "core": {attr: {"value": v, "units": core_unit(attr)} for attr, v in self.core.items()},
                 "schedule": json.loads(schedule_json(self.schedule)), "fluids": dict(self.fluids),
                 "measurement": asdict(self.measurement), "sources": dict(self.sources)}

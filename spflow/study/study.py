@@ -92,7 +92,7 @@ class Study:
                                              or "none (model defaults)"))
         lines.append("base-model effects: " + ", ".join(f"{k} = {v:g}" for k, v in self.effects.items()))
         for e in self.experiments:
-            lines.append(f"experiment {e.name!r} ({e.role}): data {e.data}")
+            lines.append(f"experiment {e.name!r} ({e.role}): data {e.data or 'none (predicted only)'}")
             core = ", ".join(f"{attr} = {v:.6g} {core_unit(attr)}" for attr, v in e.core.items())
             lines.append(f"  core: {core}; pore volume {e.pore_volume_ml():.4g} ml")
             slugs = ", ".join(f"{s.name} {s.pv:g} PV ({s.salinity_ppm:g}/{s.surfactant_ppm:g}/{s.polymer_ppm:g} ppm "

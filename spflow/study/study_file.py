@@ -148,22 +148,26 @@ class _StudyReader:
         role = table.get("role")
         if role not in ROLES:
             raise StudyError(f"{at}: field 'role' = {role!r}; allowed roles: {', '.join(ROLES)}")
-        data, ds = self._data(table.get("data"), at)
-        data_where = f"data file {str(data)!r}"
+        if role == "predict" and "data" not in table:  # a flood to predict only: everything from the study
+            data, ds, attrs, data_where = None, None, {}, "its data file (none: a predict-only experiment)"
+        else:
+            data, ds = self._data(table.get("data"), at)
+            attrs, data_where = ds.attrs, f"data file {str(data)!r}"
         sources: dict[str, str] = {}
-        core = self._core(table.get("core", {}), ds.attrs, at, data_where, sources)
-        core[RATE_ATTR] = self._rate(table.get("rate"), ds.attrs, core["core_diameter_m"], at, data_where, sources)
-        self._volumes(core, ds.attrs, at, data_where)
-        schedule = self._schedule(name, table.get("schedule", FROM_DATA), ds, at, data_where, sources)
-        self._length(schedule, ds, at, data_where)
+        core = self._core(table.get("core", {}), attrs, at, data_where, sources)
+        core[RATE_ATTR] = self._rate(table.get("rate"), attrs, core["core_diameter_m"], at, data_where, sources)
+        self._volumes(core, attrs, at, data_where)
+        schedule = self._schedule(name, table.get("schedule", FROM_DATA), attrs, at, data_where, sources)
+        if ds is not None:
+            self._length(schedule, ds, at, data_where)
         fluids = self._fluids(name, table.get("fluids", {}), at, fixed, calibrated, sources)
-        measurement = self._measurement(name, table.get("measurement", {}), ds.attrs, at, data_where, sources)
+        measurement = self._measurement(name, table.get("measurement", {}), attrs, at, data_where, sources)
         return Experiment(name, role, data, core, schedule, fluids, measurement, sources, ds)
 
     def _data(self, value, at):
         if not isinstance(value, str) or not value.strip():
             raise StudyError(f"{at}: field 'data' must be the path of a CSV or netCDF file (relative to the study "
-                             f"file), got {value!r}")
+                             f"file), got {value!r}; only role 'predict' may go without data")
         file = Path(value)
         if not file.is_absolute():
             file = self.path.parent / file
@@ -238,10 +242,8 @@ class _StudyReader:
                                      f"(length, diameter, porosity, swi), which gives {expected:.6g} ml; allowed "
                                      f"within {_PORE_VOLUME_AGREE:.0%}")
 
-    def _schedule(self, name, value, ds, at, data_where, sources) -> Schedule:
-        own = None
-        if "schedule" in ds.attrs:
-            own = as_schedule(json.loads(ds.attrs["schedule"]))
+    def _schedule(self, name, value, attrs, at, data_where, sources) -> Schedule:
+        own = as_schedule(json.loads(attrs["schedule"])) if "schedule" in attrs else None
         if value == FROM_DATA:
             if own is None:
                 raise StudyError(f"{at}: field 'schedule' = {FROM_DATA!r} but {data_where} holds no schedule; give "

@@ -110,3 +110,38 @@ def test_by_role_rejects_unknown_roles(tmp_path):
     study = load_study(write_project(tmp_path))
     with pytest.raises(StudyError, match="allowed roles: calibration, heldout, predict"):
         study.by_role("training")
+
+
+PREDICT = '''
+[[experiment]]
+name = "design"
+role = "predict"
+rate = "1 ml/h"
+schedule = [{ pv = 0.5, salinity_ppm = 9400, surfactant_ppm = 5000, polymer_ppm = 2000 }]
+[experiment.core]
+length = "1 ft"
+diameter = "2 in"
+porosity = "20 %"
+permeability = "1 D"
+swi = "0.25"
+[experiment.measurement]
+dead_volume_ml = 1.0
+'''
+
+
+def test_a_predict_experiment_may_go_without_data(tmp_path):
+    study = load_study(write_project(tmp_path, study=STUDY + PREDICT))
+    e = study.experiment("design")
+    assert e.data is None and e.role == "predict"
+    assert e.model_params() == pytest.approx({"LENGTH": FOOT, "DIAMETER": 2 * INCH, "PORO": 0.2, "PERM": 1000.0,
+                                              "SWI": 0.25, "QINJ": 1 / 60})
+    assert study.forward_experiments(roles=["predict"])[0]["schedule"]["slugs"][0]["surfactant_ppm"] == 5000.0
+    assert study.to_dict()["experiments"][1]["data"] is None
+    with pytest.raises(StudyError, match="'design' \\(predict\\) has no data file"):
+        e.observations()
+
+
+def test_only_predict_experiments_may_go_without_data(tmp_path):
+    text = STUDY + PREDICT.replace('role = "predict"', 'role = "heldout"')
+    with pytest.raises(StudyError, match="experiment 'design': field 'data' must be the path .* only role 'predict'"):
+        load_study(write_project(tmp_path, study=text))
