@@ -51,3 +51,18 @@ def test_bad_experiments_are_rejected_when_the_stage_is_built(experiments, messa
     with pytest.raises(ParameterError) as err:
         Forward(experiments=experiments)
     assert message in str(err.value)
+
+
+def test_study_experiments_feed_the_forward_stage_and_the_gap_diagnosis(tmp_path):
+    from spflow.plugins.gap.observed import load_experiments
+    from spflow.study import load_study
+    from study_project import write_project
+
+    study = load_study(write_project(tmp_path))
+    stage = Forward(experiments=study.forward_experiments(), fixed=study.fixed, cells=8, pv_step=0.5)
+    out = stage.run(StageContext("forward"))
+    assert list(out["experiment"].values) == ["core7"] and float(out["total_pv"][0]) == pytest.approx(3.0)
+    (seen,) = load_experiments([study.experiment("core7").observations()], pv_step=0.1)
+    assert seen.core == pytest.approx({"LENGTH": 0.30, "DIAMETER": 0.0381, "PORO": 0.19, "PERM": 350.0,
+                                       "SWI": 0.28, "QINJ": 0.5})
+    assert seen.measurement.dead_volume_ml == 0.5 and seen.noise_from_data

@@ -108,3 +108,12 @@ def test_init_refuses_to_overwrite_and_names_bad_data(user_dir, capsys):
     assert spflow.cli.main(["init", "other", "--data", "bad.csv"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("spflow: error:") and "bad.csv" in err and "UTF-16" in err
+
+
+def test_init_without_data_writes_the_bundled_study(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert spflow.cli.main(["init", "bundled"]) == 0
+    assert "DEFAULT no --data: the bundled study BCF1-BCF3" in capsys.readouterr().out
+    assert sorted(p.name for p in (tmp_path / "bundled").iterdir()) == ["BCF1.nc", "BCF2.nc", "BCF3.nc", "study.toml"]
+    assert spflow.cli.main(["check", "bundled/study.toml"]) == 0
+    assert "study OK: 3 experiment(s), 0 default(s) taken" in capsys.readouterr().out
