@@ -38,7 +38,7 @@ from spflow.synthetic.noise_model import NoiseModel
 
 from .format import MAX_PV, TUBE_VARIABLES, VARIABLES, build_coreflood
 from .lab_units import ALLOWED_UNITS, DEFAULT_UNITS, factor
-from .metadata import CORE_ATTRS, core_unit
+from .metadata import core_unit
 from .quantities import VELOCITY_UNITS, parse_quantity, velocity_to_rate
 
 __all__ = ["read_csv"]

@@ -375,6 +375,8 @@ def load_study(path) -> Study:
     space, fixed = reader.parameters(table.get("parameters"))
     effects = reader.effects(table.get("effects"))
     tables = table.get("experiment")
+    if isinstance(tables, Mapping):
+        reader.fail("'experiment' must be an array of tables: write [[experiment]] (double brackets) per coreflood")
     if not isinstance(tables, list) or not tables:
         reader.fail("no experiments: add at least one [[experiment]] table (name, role, data, core, rate, ...)")
     calibrated = {n for v in space.values() for n in v["names"]}
