@@ -58,11 +58,25 @@ def _init(args: argparse.Namespace) -> int:
     return 0
 
 
+def init_markers(path) -> list[str]:
+    """The lines of a study file still marked ``# DEFAULT:`` by ``spflow init`` (values it chose, not the user),
+    as ``"line N: text"``."""
+    lines = Path(path).read_text(encoding="utf-8", errors="replace").splitlines()
+    return [f"line {i}: {line.split('#', 1)[0].strip() or line.strip()}" for i, line in enumerate(lines, 1)
+            if "# DEFAULT:" in line and not line.lstrip().startswith("#")]
+
+
 def _check(args: argparse.Namespace) -> int:
     study = load_study(args.study)
     for line in study.describe():
         print(line)
-    print(f"study OK: {len(study.experiments)} experiment(s), {len(study.defaults_taken)} default(s) taken")
+    marked = init_markers(args.study)
+    if marked:
+        print(f"values still marked '# DEFAULT:' by spflow init ({len(marked)}; replace those you know):")
+        for line in marked:
+            print(f"  {line}")
+    print(f"study OK: {len(study.experiments)} experiment(s), {len(study.defaults_taken)} default(s) taken, "
+          f"{len(marked)} init default(s) left in the file")
     return 0
 
 

@@ -117,3 +117,14 @@ def test_init_without_data_writes_the_bundled_study(tmp_path, monkeypatch, capsy
     assert sorted(p.name for p in (tmp_path / "bundled").iterdir()) == ["BCF1.nc", "BCF2.nc", "BCF3.nc", "study.toml"]
     assert spflow.cli.main(["check", "bundled/study.toml"]) == 0
     assert "study OK: 3 experiment(s), 0 default(s) taken" in capsys.readouterr().out
+
+
+def test_check_lists_values_still_marked_by_init(tmp_path, capsys):
+    """`spflow check` lists the values `spflow init` chose that the user has not replaced (comment lines aside)."""
+    from spflow.study.command import init_markers
+
+    study = tmp_path / "s.toml"
+    study.write_text('# Values marked \'# DEFAULT:\' were chosen by init\nversion = 1\n'
+                     'role = "calibration"  # DEFAULT: every file calibrates except the last\n'
+                     'permeability = "250 mD"\n')
+    assert init_markers(study) == ['line 3: role = "calibration"']
