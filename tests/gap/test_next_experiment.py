@@ -197,6 +197,17 @@ def test_rate_steps_rank_first_and_separate_the_toy(toy):
     assert float(repeat["worst_accuracy"]) < 0.5  # a replicate of the reference flood does not separate them
 
 
+def test_monte_carlo_parameter_spread_keeps_the_ranking(toy):
+    exp, fits, _, _, bases = toy
+    designs = design_space(exp.schedule, 0.25, kinds=["repeat", "rate_step"])
+    table = rank_designs(hypotheses_from_fits(fits, bases=bases), bases["viscosity"], exp, designs, draws=1000,
+                         parameter_draws=12)
+    assert list(table["kind"].values[:-1]) == ["rate_step"] * (len(designs) - 1)
+    assert table.attrs["parameter_uncertainty_method"] == "Monte Carlo over 12 parameter draws"
+    # forward runs: per hypothesis and design, the fit plus 12 draws
+    assert table.attrs["forward_runs"] == 2 * len(designs) * 13
+
+
 def test_ranked_table_schema(toy):
     _, _, _, table, _ = toy
     n = table.sizes["design"]
