@@ -20,6 +20,7 @@ base without permeability reduction against "base + permeability_reduction" with
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -85,6 +86,8 @@ def main(argv=None) -> int:
                         for a in names for b in names if a != b)
         print(f"{int(r['rank']):>4} {float(r['worst_accuracy']):>10.2f} {acc:>16} {kl:>22} "
               f"{float(r['duration']):>5.1f}  {r['label'].values}")
+        shares = json.loads(str(r["separation_by_slug"].values))
+        print(f"{'':>62}separated by {', '.join(f'{k} {v:.2f}' for k, v in list(shares.items())[:3])}")
     out = Path(args.out)
     paths = write_proposal(table, out)
     table.to_netcdf(out / "next_experiment.nc")

@@ -195,6 +195,12 @@ def test_rate_steps_rank_first_and_separate_the_toy(toy):
     assert float(table["worst_accuracy"][0]) > 0.95
     repeat = table.isel(design=kinds.index("repeat"))
     assert float(repeat["worst_accuracy"]) < 0.5  # a replicate of the reference flood does not separate them
+    # the separation of the best design comes from the parts of the polymer slug injected at a changed rate
+    best = table.isel(design=0)
+    schedule = as_schedule(json.loads(str(best["schedule"].values)))
+    changed = {s.name for s in schedule.slugs if s.rate_ml_min not in (None, 0.25)}
+    shares = json.loads(str(best["separation_by_slug"].values))
+    assert sum(shares.get(n, 0.0) for n in changed) > 0.5
 
 
 def test_monte_carlo_parameter_spread_keeps_the_ranking(toy):

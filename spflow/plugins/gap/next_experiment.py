@@ -206,6 +206,17 @@ def _parameter_spread(predictor: Predictor, layout, h: Hypothesis, draws: int, d
     return mu, np.column_stack(done) / np.sqrt(len(done))
 
 
+def _slug_shares(layout, exp: Experiment, shift: np.ndarray, s_alt: np.ndarray) -> dict[str, float]:
+    """Shares of the mean-shift term ``d' S^-1 d`` of the log ratio by slug of ``exp`` (sums to 1; slugs with a
+    share below 0.005 left out), largest first."""
+    terms = shift * np.linalg.solve(s_alt, shift)
+    total = terms.sum()
+    slug = np.concatenate([b.slug for b in layout.blocks])
+    names = [x.name for x in exp.schedule.slugs]
+    shares = {names[j]: float(terms[slug == j].sum() / total) for j in np.unique(slug)} if total > 0 else {}
+    return dict(sorted(((n, round(v, 3)) for n, v in shares.items() if abs(v) >= 0.005), key=lambda kv: -kv[1]))
+
+
 def _duration_h(schedule, q0: float, pv_ml: float) -> float:
     return float(sum(s.pv * pv_ml / (q0 if s.rate_ml_min is None else s.rate_ml_min) for s in schedule.slugs) / 60.0)
 
@@ -253,6 +264,7 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
     moments = {key: np.full((nd, k, k), np.nan) for key in ("expected", "sd", "se", "margin")}
     power = np.full((nd, k, k), np.nan)
     accuracy = np.full((nd, k), np.nan)
+    where = np.full((nd, k, k), None, dtype=object)
     failed = np.zeros(nd, int)
     points = np.zeros(nd, int)
     for i, (design, exp) in enumerate(zip(designs, exps)):
@@ -288,6 +300,7 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                                           se_factor=se_factor)
                     for key in moments:
                         moments[key][i, a, b] = getattr(r, key)
+                    where[i, a, b] = _slug_shares(layout, exp, shifts[b] - shifts[a], covs[b])
             power[i, a], accuracy[i, a] = decision_power(shifts, covs, a, min_delta=min_delta, se_factor=se_factor,
                                                          draws=draws, seed=seed)
     off = ~np.eye(k, dtype=bool)
@@ -300,6 +313,8 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
     mean_accuracy = np.where(usable, np.mean(accuracy, axis=1), np.nan)
     worst_power = over_pairs(power, np.min)
     worst_expected = over_pairs(moments["expected"], np.min)
+    worst_where = [json.dumps(where[i][off][int(np.argmin(moments["expected"][i][off]))]) if usable[i] else "{}"
+                   for i in range(nd)]
     key = {"accuracy": worst_accuracy, "mean_accuracy": mean_accuracy, "expected": worst_expected}[criterion]
     # simulated accuracies are good to about 0.01: equal at two decimals is a tie, broken by the worst expected
     # log ratio (the larger, the more the design separates beyond the decision margin)
@@ -341,6 +356,9 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
             "duration": ("design", per_design([_duration_h(d.schedule, q0, pv_ml) for d in designs]),
                          {"units": "h", "long_name": "injection time at the design's rates"}),
             "n_points": ("design", per_design(points), {"units": "1", "long_name": "measured points compared"}),
+            "separation_by_slug": ("design", np.array([worst_where[i] for i in order], dtype=object), {
+                "long_name": "JSON {slug: share of the mean-shift term d' S^-1 d} of the pair with the smallest "
+                "expected log ratio: which slugs of the design separate the hypotheses"}),
             "failed_runs": ("design", per_design(failed), {"units": "1",
                                                            "long_name": "hypotheses whose forward runs failed"}),
         },

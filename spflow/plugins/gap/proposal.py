@@ -55,6 +55,7 @@ def proposal_summary(table: xr.Dataset, rank: int = 1, runners_up: int = 4) -> d
         "mean_accuracy": _number(row["mean_accuracy"]),
         "accuracy": {a: _number(row["accuracy"].sel(truth=a)) for a in names},
         "worst_expected_log_ratio_nat": _number(row["worst_expected_log_ratio"]),
+        "separation_by_slug": json.loads(str(row["separation_by_slug"].values)),
         "pairs": pairs,
         "hypotheses": names,
         "runners_up": [{"label": str(o["label"].values), "worst_accuracy": _number(o["worst_accuracy"]),
