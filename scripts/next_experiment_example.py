@@ -10,8 +10,8 @@ and oil cut, each time over the polymer viscosity coefficients AP1 and AP3:
 With the short chase water the residual resistance hardly shows and both fit the flood (the weak identification
 of permeability reduction reported in issue 20); with BCF1's own 1.27 PV chase water they do not. Both carry their linearised calibration covariance. The script ranks the design space of BCF1
 (:func:`spflow.plugins.gap.design_space.design_space`) by the worst hypothesis's decision accuracy, prints the
-table, and writes the proposal (``next_experiment.toml``, ``next_experiment.json``) and the table
-(``next_experiment.nc``) into ``--out``. ``--nested`` ranks the diagnosis's own form of the question instead: the
+table, and writes the proposal (``next_experiment.toml``, ``next_experiment.json``, the study experiment
+``next_experiment_study.toml``) and the table (``next_experiment.nc``) into ``--out``. ``--nested`` ranks the diagnosis's own form of the question instead: the
 base without permeability reduction against "base + permeability_reduction" with the strength freed.
 
     .venv/bin/python scripts/next_experiment_example.py [--cells 60] [--seed 0] [--chase-pv 0.3] [--nested] [--parameter-draws N] [--out DIR]
@@ -36,6 +36,7 @@ from spflow.plugins.gap.next_experiment import hypotheses_from_fits, rank_design
 from spflow.plugins.gap.observed import load_experiments
 from spflow.plugins.gap.prediction import Predictor
 from spflow.plugins.gap.proposal import write_proposal
+from spflow.study.proposed_experiment import study_experiment_toml
 from spflow.synthetic import NoiseModel, make_coreflood
 
 PARAMETERS = {"AP1": [1.0, 60.0], "AP3": [10.0, 600.0]}
@@ -90,6 +91,11 @@ def main(argv=None) -> int:
         print(f"{'':>62}separated by {', '.join(f'{k} {v:.2f}' for k, v in list(shares.items())[:3])}")
     out = Path(args.out)
     paths = write_proposal(table, out)
+    text, missing = study_experiment_toml("next_experiment", paths["schedule"].name, exp.core, exp.measurement,
+                                          exp.name)
+    (out / "next_experiment_study.toml").write_text(text)
+    if missing:
+        print(f"next_experiment_study.toml: fill in {', '.join(missing)} (the reference coreflood does not state them)")
     table.to_netcdf(out / "next_experiment.nc")
     print(f"\naccuracy and log ratios per hypothesis: {' / '.join(names)} (truth first)")
     print(f"proposal: {paths['schedule']} and {paths['rationale']}; {table.attrs['forward_runs']} forward runs, "

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from dataclasses import replace
 
 import numpy as np
@@ -29,6 +30,8 @@ from spflow.plugins.gap.next_experiment import (Hypothesis, decision_power, hypo
 from spflow.plugins.gap.observed import load_experiments
 from spflow.plugins.gap.prediction import Predictor
 from spflow.plugins.gap.proposal import write_proposal
+from spflow.study import bundled_study_path, load_study
+from spflow.study.proposed_experiment import study_experiment_toml
 from spflow.synthetic import NoiseModel, make_coreflood
 
 
@@ -250,6 +253,33 @@ def test_proposal_files_round_trip(toy, tmp_path):
                                                                          ("viscosity", "shear_thinning")}
     with pytest.raises(ParameterError, match="rank"):
         write_proposal(table, tmp_path / "x", rank=0)
+
+
+def test_proposal_as_a_study_experiment(toy, tmp_path):
+    """The best design appended to (a copy of) the bundled study as a predict-only experiment loads back with the
+    design's schedule and the toy coreflood's core, rate and measurement chain."""
+    exp, _, _, table, _ = toy
+    paths = write_proposal(table, tmp_path)
+    text, missing = study_experiment_toml("next_experiment", paths["schedule"].name, exp.core, exp.measurement,
+                                          exp.name)
+    stated = {"LENGTH": "core.length", "DIAMETER": "core.diameter", "PORO": "core.porosity",
+              "PERM": "core.permeability", "SWI": "core.swi", "QINJ": "rate"}
+    assert sorted(missing) == sorted(f for p, f in stated.items() if p not in exp.core)
+    core = {"PERM": 700.0} | exp.core  # the core's permeability, which the toy's file does not state
+    text, missing = study_experiment_toml("next_experiment", paths["schedule"].name, core, exp.measurement)
+    assert missing == []
+    source = bundled_study_path()
+    for f in source.parent.glob("BCF*.nc"):
+        shutil.copy(f, tmp_path / f.name)
+    study_file = tmp_path / "study.toml"
+    study_file.write_text(source.read_text() + "\n" + text)
+    proposed = load_study(study_file).experiment("next_experiment")
+    assert proposed.role == "predict" and proposed.data is None
+    assert proposed.schedule.slugs == as_schedule(json.loads(str(table["schedule"].values[0]))).slugs
+    params = proposed.model_params()
+    for p in stated:
+        assert params[p] == pytest.approx(core[p], rel=1e-12)
+    assert proposed.measurement == exp.measurement
 
 
 def test_rank_designs_rejects_bad_input(toy):

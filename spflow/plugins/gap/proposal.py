@@ -7,6 +7,9 @@ From the ranked table of :func:`~spflow.plugins.gap.next_experiment.rank_designs
 * ``next_experiment.json`` — why: the hypotheses, the design's label and kind, its decision accuracy per hypothesis, its predicted
   power and expected log predictive ratio per (truth, alternative) pair, its injected PV and duration, the runner-up designs, and the
   assumptions the ranking made (base rate and its source, noise model source, decision margins, criterion).
+
+The same design as an experiment of a study file: :func:`spflow.study.proposed_experiment.study_experiment_toml`
+(the study package depends on this one, not the reverse).
 """
 
 from __future__ import annotations
