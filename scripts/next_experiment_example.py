@@ -11,10 +11,13 @@ With the short chase water the residual resistance hardly shows and both fit the
 of permeability reduction reported in issue 20); with BCF1's own 1.27 PV chase water they do not. Both carry their linearised calibration covariance. The script ranks the design space of BCF1
 (:func:`spflow.plugins.gap.design_space.design_space`) by the worst hypothesis's decision accuracy, prints the
 table, and writes the proposal (``next_experiment.toml``, ``next_experiment.json``, the study experiment
-``next_experiment_study.toml``) and the table (``next_experiment.nc``) into ``--out``. ``--nested`` ranks the diagnosis's own form of the question instead: the
+``next_experiment_study.toml``) and the table (``next_experiment.nc``) into ``--out``. ``--check-ranks`` compares
+the predicted decision accuracy of some designs with the accuracy realised on simulated lab corefloods
+(:func:`spflow.plugins.gap.design_check.realised_accuracy`). ``--nested`` ranks the diagnosis's own form of the question instead: the
 base without permeability reduction against "base + permeability_reduction" with the strength freed.
 
-    .venv/bin/python scripts/next_experiment_example.py [--cells 60] [--seed 0] [--chase-pv 0.3] [--nested] [--parameter-draws N] [--out DIR]
+    .venv/bin/python scripts/next_experiment_example.py [--cells 60] [--seed 0] [--chase-pv 0.3] [--nested] [--parameter-draws N]
+        [--check-ranks 1,5 --seeds 30] [--out DIR]
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import numpy as np
 from spflow.plugins.forward.schedule import BCF_SCHEDULES
 from spflow.plugins.gap.base_model import BaseModel
 from spflow.plugins.gap.catalogue import candidates_for
+from spflow.plugins.gap.design_check import realised_accuracy
 from spflow.plugins.gap.layout import make_layout
 from spflow.plugins.gap.least_squares import fit
 from spflow.plugins.gap.next_experiment import hypotheses_from_fits, rank_designs
@@ -49,6 +53,9 @@ def main(argv=None) -> int:
     ap.add_argument("--chase-pv", type=float, default=0.3)
     ap.add_argument("--nested", action="store_true")
     ap.add_argument("--parameter-draws", type=int, default=0, help="0: linearised parameter uncertainty")
+    ap.add_argument("--check-ranks", default="", metavar="R1,R2,...",
+                    help="designs whose predicted accuracy to check on simulated lab corefloods")
+    ap.add_argument("--seeds", type=int, default=30, help="simulated corefloods per hypothesis for --check-ranks")
     ap.add_argument("--out", default="out/next_experiment")
     args = ap.parse_args(argv)
     start = time.perf_counter()
@@ -77,7 +84,8 @@ def main(argv=None) -> int:
         values = ", ".join(f"{k} = {v:.4g}" for k, v in zip(base.labels, base.values(f.u)))
         extra = "".join(f", {k} = {v:.3g}" for k, v in f.strengths.items())
         print(f"{name}: chi2 = {f.chi2:.1f} on {dof} dof ({values}{extra})")
-    table = rank_designs(hypotheses_from_fits(fits, bases=bases), without, exp, parameter_draws=args.parameter_draws)
+    hypotheses = hypotheses_from_fits(fits, bases=bases)
+    table = rank_designs(hypotheses, without, exp, parameter_draws=args.parameter_draws)
     names = list(table["truth"].values)
     print(f"\n{'rank':>4} {'worst acc.':>10} {'accuracy':>16} {'E[log ratio] (nat)':>22} {'h':>5}  design")
     for i in range(table.sizes["design"]):
@@ -98,6 +106,11 @@ def main(argv=None) -> int:
         print(f"next_experiment_study.toml: fill in {', '.join(missing)} (the reference coreflood does not state them)")
     table.to_netcdf(out / "next_experiment.nc")
     print(f"\naccuracy and log ratios per hypothesis: {' / '.join(names)} (truth first)")
+    for rank in [int(r) for r in args.check_ranks.split(",") if r.strip()]:
+        realised = realised_accuracy(table, hypotheses, without, exp, rank, seeds=args.seeds)
+        predicted = table["accuracy"].values[rank - 1]
+        print(f"design {rank}: predicted accuracy {' / '.join(f'{x:.2f}' for x in predicted)}, realised on "
+              f"{args.seeds} simulated corefloods {' / '.join(f'{x:.2f}' for x in realised.values)}")
     print(f"proposal: {paths['schedule']} and {paths['rationale']}; {table.attrs['forward_runs']} forward runs, "
           f"{time.perf_counter() - start:.0f} s")
     return 0

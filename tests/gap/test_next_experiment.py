@@ -22,6 +22,7 @@ from spflow.core.errors import ParameterError
 from spflow.io.schedule_file import read_schedule_file, schedule_toml
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.gap.base_model import BaseModel
+from spflow.plugins.gap.design_check import realised_accuracy
 from spflow.plugins.gap.design_space import DESIGN_KINDS, design_space
 from spflow.plugins.gap.layout import make_layout
 from spflow.plugins.gap.least_squares import fit
@@ -215,6 +216,18 @@ def test_monte_carlo_parameter_spread_keeps_the_ranking(toy):
     assert table.attrs["parameter_uncertainty_method"] == "Monte Carlo over 12 parameter draws"
     # forward runs: per hypothesis and design, the fit plus 12 draws
     assert table.attrs["forward_runs"] == 2 * len(designs) * 13
+
+
+def test_predicted_accuracy_holds_on_simulated_lab_corefloods(toy):
+    """End to end: lab-like corefloods of the design (make_coreflood: the measurement chain's own random errors),
+    scored by the diagnosis's held-out predictive densities and decision rule."""
+    exp, fits, _, table, bases = toy
+    hypotheses = hypotheses_from_fits(fits, bases=bases)
+    best = realised_accuracy(table, hypotheses, bases["viscosity"], exp, rank=1, seeds=6)
+    assert np.all(best.values == 1.0)  # predicted 1.00 / 1.00
+    repeat = int(table["rank"].values[list(table["kind"].values).index("repeat")])
+    assert np.all(table["accuracy"].values[repeat - 1] < 0.05)
+    assert np.all(realised_accuracy(table, hypotheses, bases["viscosity"], exp, rank=repeat, seeds=6).values <= 1 / 6)
 
 
 def test_ranked_table_schema(toy):
