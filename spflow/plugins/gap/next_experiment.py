@@ -227,7 +227,8 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                  seed: int = 0, parameter_draws: int = 0, diff_step: float = 0.01, parallel=None,
                  log: Callable[[str], None] | None = None) -> xr.Dataset:
     """Rank ``designs`` (default: :func:`design_space` of the reference schedule at its rate) by how well they
-    separate ``hypotheses`` (at least two, distinct names), each a calibrated point of ``base``, on a coreflood with
+    separate ``hypotheses`` (at least two, distinct names), each a calibrated point of ``base`` (or of its own
+    ``Hypothesis.base``), on a coreflood with
     ``reference``'s core and measurement chain (an :class:`~spflow.plugins.gap.observed.Experiment`, e.g. a
     calibration coreflood of the diagnosis) measuring ``variables``. Returns the ranked table (best design first;
     schema in ``docs/next_experiment.md``)."""
