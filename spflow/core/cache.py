@@ -128,6 +128,7 @@ class Store:
         self._verified: dict[str, tuple[int, int]] = {}
         #: name -> [lock, depth] of the locks this object holds (re-entrant within the process).
         self._locks: dict[str, list] = {}
+        self._initialised = False
 
     def _entry(self, key: str) -> Path:
         return self.root / "objects" / key[:2] / key
@@ -143,6 +144,8 @@ class Store:
     def _initialise(self) -> None:
         """Before the first write: make the root a store (marker), refusing a directory that holds other things under
         the store's names."""
+        if self._initialised:
+            return
         marker = self.root / MARKER
         if marker.is_file():
             try:
@@ -152,15 +155,18 @@ class Store:
             if found != STORE_FORMAT:
                 raise CacheError(f"cache {self.root}: {MARKER} records store format {found!r}; this spflow writes "
                                  f"format {STORE_FORMAT} (use another --cache directory)")
+            self._initialised = True
             return
         if self.root.is_dir() and not _legacy_layout(self.root):
-            clash = sorted(p.name for p in self.root.iterdir() if p.name in _MANAGED)
+            names = {p.name for p in self.root.iterdir()}
+            clash = sorted(names & set(_MANAGED)) if MARKER not in names else []  # (another run may just have made it)
             if clash:
                 raise CacheError(f"{self.root} is not a spflow cache (no {MARKER}) but holds {clash}; refusing to "
                                  "write into it: choose another --cache directory")
         self.root.mkdir(parents=True, exist_ok=True)
         _write_json_atomic(marker, {"format": STORE_FORMAT, "store": "spflow result store",
                                     "layout": "objects/<key[:2]>/<key>/{data.nc,meta.json}"})
+        self._initialised = True
 
     # -- locks ---------------------------------------------------------------------------------------------------
     def acquire(self, name: str, *, blocking: bool = True, waiting: str = "") -> bool:
@@ -335,6 +341,7 @@ class Store:
         with contextlib.suppress(OSError):
             self.root.rmdir()  # only if nothing else is in it
         self._verified.clear()
+        self._initialised = False
         return count
 
     def _clean_tmp(self) -> int:

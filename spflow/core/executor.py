@@ -256,6 +256,7 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
     sub = _run_graph(plan.graph, to_run, twins)
     if verbose and to_run:
         print(f"[spflow] {pipeline.name}: {len(to_run)} node(s) to run, {len(result.cached)} cached", file=sys.stderr)
+
     def still_needed(name: str) -> bool:
         """With the node's lock held: False if another run stored a good entry meanwhile (then it is reused);
         otherwise clear any entry in the way (forced, or failing the checks) and return True."""
@@ -331,10 +332,16 @@ def _claim(store: Store, pending: list[str], keys: dict[str, str]) -> list[str]:
         except OSError as exc:
             raise CacheError(f"node {name!r}: cannot lock its cache entry in {store.root}: {exc}") from exc
 
-    mine = [name for name in pending if acquire(name, blocking=False)]
-    if not mine:
-        acquire(pending[0], blocking=True)
-        mine = [pending[0]]
+    mine: list[str] = []
+    try:
+        mine += [name for name in pending if acquire(name, blocking=False)]
+        if not mine:
+            acquire(pending[0], blocking=True)
+            mine.append(pending[0])
+    except BaseException:  # e.g. KeyboardInterrupt while waiting: hand back what was taken
+        for name in mine:
+            store.release(keys[name])
+        raise
     return mine
 
 

@@ -18,7 +18,7 @@ from spflow.core import locks
 from spflow.core.cache import Store
 
 PROCESSES = 4
-KEYS = 80  # 4 processes x 80 keys x (1 save + 1 load) = 640 operations (half as many for the fallback lock)
+KEYS = 80  # 4 processes x 80 keys x (1 save + 1 load) = 640 operations (a quarter for the fallback lock)
 FORK = multiprocessing.get_context("fork")
 
 
@@ -57,7 +57,7 @@ def _hammer(root, seed, use_flock, keys, barrier, queue):
     queue.put((operations, errors))
 
 
-@pytest.mark.parametrize("use_flock, keys", [(True, KEYS), (False, KEYS // 2)], ids=["flock", "o_excl"])
+@pytest.mark.parametrize("use_flock, keys", [(True, KEYS), (False, KEYS // 4)], ids=["flock", "o_excl"])
 def test_concurrent_saves_and_loads_of_overlapping_keys(tmp_path, use_flock, keys):
     barrier, queue = FORK.Barrier(PROCESSES), FORK.Queue()
     workers = [FORK.Process(target=_hammer, args=(tmp_path, seed, use_flock, keys, barrier, queue))
@@ -68,7 +68,7 @@ def test_concurrent_saves_and_loads_of_overlapping_keys(tmp_path, use_flock, key
     for w in workers:
         w.join(timeout=30)
         assert w.exitcode == 0
-    assert sum(ops for ops, _ in reports) == PROCESSES * keys * 2 >= (600 if use_flock else 300)
+    assert sum(ops for ops, _ in reports) == PROCESSES * keys * 2 >= (600 if use_flock else 150)
     assert [e for _, errors in reports for e in errors] == []
     store = Store(tmp_path)  # a consistent store: every key once, complete, verified, the right content
     assert sorted(p.name for p in (tmp_path / "objects").glob("*/*")) == sorted(_key(k) for k in range(keys))
