@@ -6,10 +6,11 @@ import errno
 import hashlib
 import io
 import json
+import multiprocessing
 import os
+import resource
 import shutil
-import subprocess
-import sys
+import signal
 import textwrap
 import warnings
 
@@ -154,31 +155,30 @@ def test_a_full_disk_names_node_cache_and_cause_and_keeps_finished_entries(toys,
     assert sorted(result.executed) == ["c", "e"] and sorted(executions(log)) == ["add", "scale:3.0"]
 
 
-WRITE_LIMIT = """
-import resource, signal, sys
-import numpy as np, xarray as xr
-from spflow.core.cache import Store
-from spflow.core.errors import CacheError
-
-store = Store(sys.argv[1])
-store.save("aa" * 32, xr.Dataset({"y": ("x", np.arange(10.0))}), {}, where="node 'small'")
-signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, resource.getrlimit(resource.RLIMIT_FSIZE)[1]))
-try:
-    store.save("bb" * 32, xr.Dataset({"y": ("x", np.linspace(0.0, 1.0, 200_000))}), {}, where="node 'big'")
-except CacheError as exc:
-    print(exc)
-"""
+def _save_beyond_a_file_size_limit(root, queue):
+    store = Store(root)
+    store.save("aa" * 32, xr.Dataset({"y": ("x", np.arange(10.0))}), {}, where="node 'small'")
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, resource.getrlimit(resource.RLIMIT_FSIZE)[1]))
+    try:
+        store.save("bb" * 32, xr.Dataset({"y": ("x", np.linspace(0.0, 1.0, 200_000))}), {}, where="node 'big'")
+        queue.put("saved")
+    except BaseException as exc:  # noqa: BLE001 - the parent inspects what came out
+        queue.put(f"{type(exc).__name__}: {exc}")
 
 
 def test_a_real_write_failure_inside_the_netcdf_library_is_one_cache_error(tmp_path):
-    """The netCDF library, not Python, hits the limit (a file-size rlimit stands in for a full disk, which needs a
-    mount): its bare ``RuntimeError: NetCDF: HDF error`` becomes one line naming the node and the cache."""
-    ran = subprocess.run([sys.executable, "-c", WRITE_LIMIT, str(tmp_path / "c")], capture_output=True, text=True,
-                         timeout=120)
-    assert ran.returncode == 0, ran.stderr
-    assert ran.stdout.startswith(f"node 'big': cannot store the result in cache {tmp_path / 'c'}: ")
-    assert ran.stdout.count("\n") == 1
+    """The netCDF library, not Python, hits the limit (a file-size rlimit, in a forked process, stands in for a full
+    disk, which needs a mount): its bare ``RuntimeError: NetCDF: HDF error`` becomes one line naming the node and the
+    cache."""
+    fork = multiprocessing.get_context("fork")
+    queue = fork.Queue()
+    child = fork.Process(target=_save_beyond_a_file_size_limit, args=(tmp_path / "c", queue))
+    child.start()
+    outcome = queue.get(timeout=120)
+    child.join(30)
+    assert outcome.startswith(f"CacheError: node 'big': cannot store the result in cache {tmp_path / 'c'}: ")
+    assert "\n" not in outcome
     store = Store(tmp_path / "c")
     assert store.verify("aa" * 32) and not store.has("bb" * 32)
     assert list((tmp_path / "c" / "tmp").iterdir()) == []
