@@ -319,8 +319,8 @@ class Store:
         """Delete what the store manages (or only unfinished temporary entries); return the number of entries removed.
 
         Refuses (:class:`CacheError`) a directory that is not a spflow store, naming it. Only the store's own names
-        are deleted; the root itself goes only if that leaves it empty. ``tmp_only`` skips temporary entries whose
-        key another process has locked (being written right now)."""
+        are deleted; the root itself goes only if that leaves it empty. A store another process is writing (one of its
+        locks held) is refused; ``tmp_only`` instead skips the temporary entries whose key is locked."""
         if not self.root.exists():
             return 0
         if not self.root.is_dir() or not self.is_store():
@@ -330,6 +330,7 @@ class Store:
                              "<key>/); refusing to delete anything in it")
         if tmp_only:
             return self._clean_tmp()
+        self._refuse_if_in_use()
         objects = self.root / "objects"
         count = sum(1 for p in objects.glob("*/*") if p.is_dir()) if objects.is_dir() else 0
         for name in _MANAGED:
@@ -343,6 +344,16 @@ class Store:
         self._verified.clear()
         self._initialised = False
         return count
+
+    def _refuse_if_in_use(self) -> None:
+        """Probe every lock of the store without waiting (one at a time: a large store has many); refuse to clean if
+        another process holds one (a run is writing). A run starting after the probe is not stopped: its writes
+        recreate the store."""
+        for name in sorted({p.name.split(".lock")[0] for p in (self.root / "locks").glob("*.lock*")}):
+            if not self.acquire(name, blocking=False):
+                raise CacheError(f"cache {self.root} is in use: another process holds its lock {name!r} (a run is "
+                                 "writing a result); nothing was deleted, clean it when the run has finished")
+            self.release(name)
 
     def _clean_tmp(self) -> int:
         tmp = self.root / "tmp"

@@ -158,3 +158,15 @@ def test_a_corrupt_leftover_is_replaced_by_a_new_save(tmp_path):
     store.save("ab" * 32, _ds(2.0), {}, where="test")
     np.testing.assert_array_equal(Store(tmp_path).load("ab" * 32)["y"].values, np.full(4, 2.0))
     assert list((tmp_path / "tmp").iterdir()) == []
+
+
+def test_clean_refuses_a_cache_a_run_is_writing(tmp_path):
+    store = Store(tmp_path / "c")
+    store.save("ab" * 32, _ds(), {}, where="test")
+    writer = Store(tmp_path / "c")  # another process's view, computing a node under its key's lock
+    assert writer.acquire("cd" * 32)
+    with pytest.raises(CacheError, match=f"cache {tmp_path / 'c'} is in use: another process holds its lock 'cdcd"):
+        store.clean()
+    assert store.verify("ab" * 32)
+    writer.release("cd" * 32)
+    assert store.clean() == 1 and not (tmp_path / "c").exists()
