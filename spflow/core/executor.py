@@ -334,7 +334,9 @@ def _claim(store: Store, pending: list[str], keys: dict[str, str]) -> list[str]:
 
     mine: list[str] = []
     try:
-        mine += [name for name in pending if acquire(name, blocking=False)]
+        for name in pending:
+            if acquire(name, blocking=False):
+                mine.append(name)
         if not mine:
             acquire(pending[0], blocking=True)
             mine.append(pending[0])
