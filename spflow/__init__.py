@@ -9,10 +9,13 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 
 from spflow.core.errors import (
+    CacheError,
     CacheIntegrityWarning,
+    CacheWarning,
     ParameterError,
     PipelineError,
     PluginError,
+    PluginWarning,
     SchemaError,
     SpflowError,
     StageError,
@@ -37,7 +40,9 @@ except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
 __all__ = [
+    "CacheError",
     "CacheIntegrityWarning",
+    "CacheWarning",
     "DatasetSchema",
     "Effect",
     "NodeStatus",
@@ -46,6 +51,7 @@ __all__ = [
     "Pipeline",
     "PipelineError",
     "PluginError",
+    "PluginWarning",
     "RunResult",
     "SchemaError",
     "SpflowError",

@@ -179,8 +179,13 @@ def _cmd_list(args: argparse.Namespace) -> int:
 def _cmd_clean(args: argparse.Namespace) -> int:
     from spflow.core.cache import Store
 
-    n = Store(args.cache).clean(tmp_only=args.tmp)
-    print(f"removed {n} {'temporary ' if args.tmp else ''}entr{'y' if n == 1 else 'ies'} from {args.cache}")
+    root = Path(args.cache)
+    n = Store(root).clean(tmp_only=args.tmp)
+    print(f"removed {n} {'temporary ' if args.tmp else ''}entr{'y' if n == 1 else 'ies'} from {root}")
+    if not args.tmp and root.is_dir():
+        kept = sorted(p.name for p in root.iterdir())
+        more = ", ..." if len(kept) > 10 else ""
+        print(f"kept {len(kept)} item(s) spflow does not manage: {', '.join(kept[:10])}{more}")
     return 0
 
 
@@ -212,7 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
     p_list = sub.add_parser("list", help="list pipelines, registered stages, effects and forward-model parameters")
     p_list.add_argument("what", nargs="?", choices=["pipelines", "stages", "effects", "params", "all"], default="all")
 
-    p_clean = sub.add_parser("clean", help="delete the cache")
+    p_clean = sub.add_parser("clean", help="delete the cache (only what spflow stores; refuses a non-cache directory)")
     p_clean.add_argument("--tmp", action="store_true", help="only delete unfinished temporary entries")
 
     for p in (p_run, p_status, p_report, p_clean):
