@@ -6,10 +6,11 @@ by ``area_scale``: the Darcy velocity, the pressure drop and every per-pore-volu
 the volumes and rates of the summary carry the factor (the scaling is printed and stored in :class:`OpmDeck`).
 
 Wells: the injector sits in the first block (water rate and WPOLYMER concentration per slug: a slug's
-``rate_ml_min`` or QINJ, scaled like the cross-section), the producer in the last one (bottom-hole pressure). Their connection transmissibility factors are those of half a block, so the
-injector and producer BHPs are the pressures of the inlet and outlet faces and ``BHP_inj - BHP_prod`` is the
-pressure drop across the core as spflow computes it. Initial state: water at ``SWI``, pressure the steady oil-flow
-profile above the producer pressure (a uniform pressure equal to the producer BHP stalls OPM's first Newton step).
+``rate_ml_min`` or QINJ, scaled like the cross-section), the producer in the last one (bottom-hole pressure).
+Their connection transmissibility factors are those of half a block, so the injector and producer BHPs are the
+pressures of the inlet and outlet faces and ``BHP_inj - BHP_prod`` is the pressure drop across the core as spflow
+computes it. Initial state: water at ``SWI``, pressure the steady flow profile of the initial fluids at the first
+slug's rate above the producer pressure (a uniform pressure equal to the producer BHP stalls OPM's first Newton step).
 Water and oil are nearly incompressible (1e-7 1/bar); rock compressibility 1e-8 1/bar.
 
 Mechanisms OPM cannot express are refused or approximated (:mod:`.opm_mechanisms`); the tables are

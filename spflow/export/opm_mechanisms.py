@@ -63,7 +63,8 @@ def _shear_mechanisms(p: dict[str, float], shear_sw: float | None) -> list[Mecha
 def check_mechanisms(sched, p: dict[str, float], s: dict[str, float], shear_sw: float | None = None) -> list[Mechanism]:
     """Every active mechanism of schedule ``sched``, resolved parameters ``p`` and effect strengths ``s`` that OPM
     Flow's polymer model cannot express (an empty list: the export is exact up to table interpolation);
-    ``shear_sw`` is the saturation at which shear thinning is matched (:func:`.opm_shear.shear_reference_saturation`)."""
+    ``shear_sw`` is the saturation at which shear thinning is matched
+    (:func:`.opm_shear.shear_reference_saturation`)."""
     found = []
     has_polymer = any(sl.polymer_ppm > 0.0 for sl in sched.slugs)
     surf = [sl.name for sl in sched.slugs if sl.surfactant_ppm > 0.0]

@@ -51,7 +51,8 @@ from spflow.plugins.forward.physics.shear_thinning import SI_FACTOR, half_shear_
 
 from .opm_tables import KG_M3_PER_PPM, KG_M3_PER_WT_PERCENT, OpmTables
 
-__all__ = ["OpmShear", "opm_shear", "shear_reference_saturation", "matching_bore_diameter", "SECONDS_PER_DAY"]
+__all__ = ["OpmShear", "opm_shear", "shear_reference_saturation", "rate_per_velocity", "matching_bore_diameter",
+           "SECONDS_PER_DAY"]
 
 SECONDS_PER_DAY = 86400.0
 #: the table runs from M = 1 - 1e-6 to M = 1e-6 (at most 20 decades either side of gamma_half)

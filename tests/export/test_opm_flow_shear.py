@@ -3,7 +3,7 @@ spflow's first-order scheme.
 
 * Single-phase polymer flood with rate steps (a core at residual oil, ``SWI = 1 - S2RWC``, ``S1RWC = 0.2`` so OPM's
   ``S_w - Swcr`` is not ``S_w``): the per-slug rates go into WCONINJE, and the pressure drop at every rate plateau
-  (0.0625 to 2 ml/min: equivalent shear rates about 13 to 420 1/s around the half shear rate of 60 1/s) agrees
+  (0.0625 to 2 ml/min: equivalent shear rates 25 to 790 1/s around the half shear rate of 60 1/s) agrees
   within 2 %. The mapping is exact here (the saturation cannot change).
 * Two-phase polymer flood (the acceptance case of ``test_opm_flow_agreement`` with shear thinning on): the export is
   an approximation matched at ``S_w* = 1 - S2RWC`` (printed); recovery at the end within 0.005, Δp at the end of the
