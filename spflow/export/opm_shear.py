@@ -29,8 +29,8 @@ exp(A2 Cp)``) is exact at ``c_ref`` only.
 
 Why not SHRATE (OPM's shear-rate form, ``SHRATE v sqrt(phi S_w / (k_rw,OPM k))``): OPM's ``k_rw,OPM`` there is ``mu_w``
 times the water mobility, which holds the polymer and ``R_k`` (so its shear rate carries ``sqrt(P(c) R_k)``: measured
-``sqrt(P)`` = 2.8 and 4.4 times spflow's at 1000 and 2000 ppm), and OPM 2022.10 aborts (an ``isfinite`` assertion)
-on every face whose upstream ``k_rw`` is 0, i.e. ahead of the water front of a core at ``SWI = S1RWC``.
+2.8 and 4.3 times spflow's at 1000 and 2000 ppm, ``sqrt(P)`` = 2.86 and 4.40), and OPM 2022.10 aborts (an ``isfinite``
+assertion) on every face whose upstream ``k_rw`` is 0, i.e. ahead of the water front of a core at ``SWI = S1RWC``.
 
 Wells: OPM shears the water of a polymer well connection at ``q_w / (2 pi sqrt(r_e r_w) L phi (S_w - Swcr))``
 (``r_e = sqrt(DX DY / pi)``, ``L = DZ``, ``r_w`` half the COMPDAT diameter). :func:`matching_bore_diameter` chooses

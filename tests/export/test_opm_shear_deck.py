@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from spflow.core.errors import ParameterError
 from spflow.export.opm_deck import write_opm_deck
 from spflow.export.opm_mechanisms import OpmExportError
 from spflow.plugins.forward.schedule import Schedule, Slug
@@ -130,3 +131,11 @@ def test_each_slug_injects_at_its_own_rate(residual_oil_deck):
     assert rates == pytest.approx(expected, rel=1e-9)
     pore_volume = 0.1524 * core_area * deck.area_scale * RESIDUAL_OIL["PORO"]  # default LENGTH
     assert steps == pytest.approx([s.pv * pore_volume / r for s, r in zip(SCHED.slugs, expected)], rel=1e-8)
+
+
+@pytest.mark.parametrize("sw", [0.22, 1.01, float("nan")])
+def test_bad_matching_saturation_is_refused_before_writing(tmp_path, sw):
+    with pytest.raises(ParameterError, match="shear_sw"):
+        write_opm_deck(tmp_path / "E.DATA", SCHED, BASE | {"SWI": 0.22}, EFFECTS, cells=30, approximate=True,
+                       shear_sw=sw, log=lambda m: None)
+    assert not (tmp_path / "E.DATA").exists()
