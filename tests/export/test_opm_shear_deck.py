@@ -13,6 +13,7 @@ import pytest
 from spflow.core.errors import ParameterError
 from spflow.export.opm_deck import write_opm_deck
 from spflow.export.opm_mechanisms import OpmExportError
+from spflow.export.opm_run import summary_to_series
 from spflow.plugins.forward.schedule import Schedule, Slug
 
 from .deck_text import expand, keyword_records, table
@@ -139,3 +140,17 @@ def test_bad_matching_saturation_is_refused_before_writing(tmp_path, sw):
         write_opm_deck(tmp_path / "E.DATA", SCHED, BASE | {"SWI": 0.22}, EFFECTS, cells=30, approximate=True,
                        shear_sw=sw, log=lambda m: None)
     assert not (tmp_path / "E.DATA").exists()
+
+
+def test_a_core_without_oil_reports_zero_recovery(tmp_path):
+    """A water-filled core (OOIP = 0, SWI = 1) gives recovery 0, not 0/0 (summary vectors made up here)."""
+    p = RESIDUAL_OIL | {"SWI": 1.0}
+    deck = write_opm_deck(tmp_path / "W.DATA", SCHED, p, EFFECTS, cells=10, log=lambda m: None)
+    n = 4
+    water = np.linspace(1.0, 4.0, n) * deck.pore_volume_m3 / 4.0
+    summary = {"FOPT": np.zeros(n), "FOIP": np.zeros(n), "FWIT": water, "FWPT": water,
+               "WBHP:INJ": np.full(n, 201.0), "WBHP:PROD": np.full(n, 200.0)}
+    with np.errstate(all="raise"):
+        series = summary_to_series(summary, deck)
+    assert np.all(series.recovery.values == 0.0) and np.all(series.oil_cut.values == 0.0)
+    np.testing.assert_allclose(series.dp.values, 1.0e5)
