@@ -9,10 +9,13 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 
 from spflow.core.errors import (
+    CacheError,
     CacheIntegrityWarning,
+    CacheWarning,
     ParameterError,
     PipelineError,
     PluginError,
+    PluginWarning,
     SchemaError,
     SpflowError,
     StageError,
@@ -28,6 +31,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.forward.effects import Effect
 from spflow.plugins.forward.simulate import simulate
 from spflow.io import load_coreflood
+from spflow.study import Study, StudyError, bundled_study, load_study
 from spflow import synthetic
 
 try:
@@ -36,7 +40,9 @@ except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
 __all__ = [
+    "CacheError",
     "CacheIntegrityWarning",
+    "CacheWarning",
     "DatasetSchema",
     "Effect",
     "NodeStatus",
@@ -45,18 +51,23 @@ __all__ = [
     "Pipeline",
     "PipelineError",
     "PluginError",
+    "PluginWarning",
     "RunResult",
     "SchemaError",
     "SpflowError",
     "Stage",
     "StageContext",
     "StageError",
+    "Study",
+    "StudyError",
     "Variable",
     "__version__",
+    "bundled_study",
     "canonical_hash",
     "get_registry",
     "hookimpl",
     "load_coreflood",
+    "load_study",
     "register_plugin",
     "reset_registry",
     "run",

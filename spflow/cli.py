@@ -38,6 +38,7 @@ from spflow.core.plugins import get_registry
 from spflow.plugins.gap.command import add_parser as add_diagnose_parser
 from spflow.plugins.gap.command import main as diagnose_command
 from spflow.export.command import add_parser as add_export_parser, main as export_command
+from spflow.study.command import add_parser as add_study_parsers, main as study_command
 
 
 def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) -> Pipeline:
@@ -178,8 +179,13 @@ def _cmd_list(args: argparse.Namespace) -> int:
 def _cmd_clean(args: argparse.Namespace) -> int:
     from spflow.core.cache import Store
 
-    n = Store(args.cache).clean(tmp_only=args.tmp)
-    print(f"removed {n} {'temporary ' if args.tmp else ''}entr{'y' if n == 1 else 'ies'} from {args.cache}")
+    root = Path(args.cache)
+    n = Store(root).clean(tmp_only=args.tmp)
+    print(f"removed {n} {'temporary ' if args.tmp else ''}entr{'y' if n == 1 else 'ies'} from {root}")
+    if not args.tmp and root.is_dir():
+        kept = sorted(p.name for p in root.iterdir())
+        more = ", ..." if len(kept) > 10 else ""
+        print(f"kept {len(kept)} item(s) spflow does not manage: {', '.join(kept[:10])}{more}")
     return 0
 
 
@@ -211,20 +217,22 @@ def build_parser() -> argparse.ArgumentParser:
     p_list = sub.add_parser("list", help="list pipelines, registered stages, effects and forward-model parameters")
     p_list.add_argument("what", nargs="?", choices=["pipelines", "stages", "effects", "params", "all"], default="all")
 
-    p_clean = sub.add_parser("clean", help="delete the cache")
+    p_clean = sub.add_parser("clean", help="delete the cache (only what spflow stores; refuses a non-cache directory)")
     p_clean.add_argument("--tmp", action="store_true", help="only delete unfinished temporary entries")
 
     for p in (p_run, p_status, p_report, p_clean):
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
     add_diagnose_parser(sub)
     add_export_parser(sub)
+    add_study_parsers(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
-               "diagnose": diagnose_command, "export": export_command, "compare": export_command}[args.command]
+               "diagnose": diagnose_command, "export": export_command, "compare": export_command,
+               "init": study_command, "check": study_command}[args.command]
     try:
         return handler(args)
     except SpflowError as exc:

@@ -11,7 +11,10 @@ __all__ = [
     "PipelineError",
     "StageError",
     "PluginError",
+    "CacheError",
     "CacheIntegrityWarning",
+    "CacheWarning",
+    "PluginWarning",
 ]
 
 
@@ -35,6 +38,10 @@ class PluginError(SpflowError):
     """A plugin contributed something invalid (duplicate name, wrong type)."""
 
 
+class CacheError(SpflowError):
+    """The result store cannot be used: not a spflow cache, or a write failed (full or read-only disk)."""
+
+
 class StageError(SpflowError):
     """A stage raised while running; ``node`` and ``stage`` say where, ``__cause__`` holds the original error."""
 
@@ -46,3 +53,11 @@ class StageError(SpflowError):
 
 class CacheIntegrityWarning(UserWarning):
     """A cache entry failed its checksum; it is discarded and recomputed, never loaded."""
+
+
+class CacheWarning(UserWarning):
+    """A best-effort write to the cache (the per-pipeline manifest behind ``status``) failed; the run goes on."""
+
+
+class PluginWarning(UserWarning):
+    """A third-party plugin failed (at import, in a hook, or with an unknown hook) and is left out; spflow goes on."""

@@ -1,15 +1,23 @@
 """Run a pipeline: plan from provenance keys, reuse cached results, execute the rest level by level in parallel.
 
 * Keys are computed for every node before anything runs (see :mod:`spflow.core.provenance`).
-* A node whose key is in the store (and passes its checksum) is not executed; a corrupt entry is discarded with a
-  :class:`~spflow.core.errors.CacheIntegrityWarning` and recomputed.
+* A node whose key is in the store is not executed if the entry passes its checksum, records that key and stage, and
+  matches the stage's output schema (dims, variables, dtypes, units: read without loading the arrays); any other
+  entry is discarded with a :class:`~spflow.core.errors.CacheIntegrityWarning` and recomputed.
+* Runs sharing a cache coordinate through per-key locks: a node is computed under its key's lock, and a run that
+  finds the lock taken computes its other ready nodes first, then waits and reuses what the other run stored. A run
+  never waits for a lock while holding another, so two runs cannot deadlock.
 * Nodes to execute run by topological generation. A generation of several nodes runs them side by side with joblib
   (each node then gets ``n_jobs=1`` for its own work); a lone node gets the whole worker budget for its inner
   parallelism. One parallel layer per level.
 * Nodes with the same key (the same stage, params and upstream data, e.g. one node copied into two included
   sub-pipelines) are computed once per run; the others read the stored result.
 * Each finished node is validated and written to the store as soon as it completes, so an exception or
-  KeyboardInterrupt loses nothing that finished; the next run resumes from there.
+  KeyboardInterrupt loses nothing that finished; the next run resumes from there. A failed write (full or read-only
+  disk) stops the run with a :class:`~spflow.core.errors.CacheError` naming the node, the cache and the cause.
+* The per-pipeline manifest (behind ``status``'s explanations) is written only when it changes, and best-effort: a
+  failure is a :class:`~spflow.core.errors.CacheWarning`. A fully cached run writes nothing, so it works on a
+  read-only cache.
 """
 
 from __future__ import annotations
@@ -27,7 +35,7 @@ import networkx as nx
 import xarray as xr
 
 from .cache import Store
-from .errors import CacheIntegrityWarning, PipelineError, StageError
+from .errors import CacheError, CacheIntegrityWarning, CacheWarning, PipelineError, SchemaError, StageError
 from .pipeline import Pipeline
 from .plugins import get_registry
 from .provenance import key_of, provenance, stale_reasons
@@ -191,20 +199,17 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
         if key in first_with:
             twins[name] = first_with[key]
             continue
-        if name in forced:
-            store.discard(key)
-        elif store.has(key):
-            if store.verify(key):
+        if name not in forced and store.has(key):
+            problem = _entry_problem(store, key, plan.stages[name])
+            if problem is None:
                 result.cached.append(name)
                 continue
-            warnings.warn(
-                f"cache entry {key[:12]} of node {name!r} failed its checksum; discarding and recomputing",
-                CacheIntegrityWarning, stacklevel=2,
-            )
-            store.discard(key)
+            warnings.warn(f"cache entry {key[:12]} of node {name!r} {problem}; discarding and recomputing",
+                          CacheIntegrityWarning, stacklevel=2)
         to_run.append(name)
         first_with[key] = name
-    store.update_manifest(pipeline.name, {name: plan.prov[name] for name in result.cached})
+    manifest = _Manifest(store, pipeline.name)
+    manifest.note({name: plan.prov[name] for name in result.cached})
 
     if only:
         for name in to_run:
@@ -231,8 +236,8 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
         if stage.output is not None:
             stage.output.validate(out, stage=stage.name, port="output")
         meta = dict(plan.prov[name], node=name, pipeline=pipeline.name, seconds=round(seconds, 6))
-        store.save(plan.keys[name], out, meta, where=f"stage {stage.name!r} output")
-        store.update_manifest(pipeline.name, {name: plan.prov[name]})
+        store.save(plan.keys[name], out, meta, where=f"node {name!r} (stage {stage.name!r}) output")
+        manifest.note({name: plan.prov[name]})
         memory[name] = out
         result.executed.append(name)
         if verbose:
@@ -251,27 +256,125 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
     sub = _run_graph(plan.graph, to_run, twins)
     if verbose and to_run:
         print(f"[spflow] {pipeline.name}: {len(to_run)} node(s) to run, {len(result.cached)} cached", file=sys.stderr)
+
+    def still_needed(name: str) -> bool:
+        """With the node's lock held: False if another run stored a good entry meanwhile (then it is reused);
+        otherwise clear any entry in the way (forced, or failing the checks) and return True."""
+        key = plan.keys[name]
+        try:
+            if store.has(key):
+                if name not in forced and _entry_problem(store, key, plan.stages[name]) is None:
+                    result.cached.append(name)
+                    manifest.note({name: plan.prov[name]})
+                    if verbose:
+                        print(f"[spflow] {name}: computed meanwhile by another run; reused", file=sys.stderr)
+                    return False
+                store.discard(key)
+        except OSError as exc:
+            raise CacheError(f"node {name!r}: cannot replace its cache entry in {store.root}: {exc}") from exc
+        return True
+
     jb_backend = BACKENDS[backend]
     with _backend_context(backend, scheduler):
         for generation in nx.topological_generations(sub):
-            generation = sorted(generation)
-            if jobs > 1 and len(generation) > 1:
-                _run_parallel(generation, plan, prepare, finish, jobs, jb_backend, verbose)
-            else:
-                for name in generation:
-                    ctx = StageContext(name, n_jobs=jobs, backend=jb_backend, verbose=verbose)
-                    inputs = prepare(name)
-                    if verbose:
-                        print(f"[spflow] {name}: running {plan.stages[name].name} ...", file=sys.stderr)
-                    try:
-                        out, seconds = _execute(plan.stages[name], ctx, inputs)
-                    except Exception as exc:
-                        raise StageError(name, plan.stages[name].name, f"{type(exc).__name__}: {exc}") from exc
-                    finish(name, out, seconds)
+            pending = sorted(generation)
+            while pending:
+                mine = _claim(store, pending, plan.keys)
+                pending = [n for n in pending if n not in mine]
+                try:
+                    runnable = [n for n in mine if still_needed(n)]
+                    if jobs > 1 and len(runnable) > 1:
+                        _run_parallel(runnable, plan, prepare, finish, jobs, jb_backend, verbose)
+                    else:
+                        for name in runnable:
+                            _run_serial(name, plan, prepare, finish, jobs, jb_backend, verbose)
+                finally:
+                    for name in mine:
+                        store.release(plan.keys[name])
     computed_twins = [n for n in twins if twins[n] in result.executed]
     result.cached += computed_twins
-    store.update_manifest(pipeline.name, {name: plan.prov[name] for name in computed_twins})
+    manifest.note({name: plan.prov[name] for name in computed_twins})
     return result
+
+
+def _entry_problem(store: Store, key: str, stage: Stage) -> str | None:
+    """Why the stored entry of a node running ``stage`` cannot be reused (None if it can).
+
+    An integrity check, not an authenticity one (docs/architecture.md, threat model): the data file's sha256 against
+    its record, the record's key and stage, and the output schema of the stage (structure only, cheap)."""
+    if not store.verify(key):
+        return "failed its checksum"
+    try:
+        record = store.record(key)
+    except (OSError, ValueError) as exc:
+        return f"has an unreadable record ({exc})"
+    if record.get("key") != key or record.get("stage") != stage.name:
+        return (f"records key {str(record.get('key'))[:12]} of stage {record.get('stage')!r}, not key {key[:12]} "
+                f"of stage {stage.name!r}")
+    if stage.output is not None:
+        try:
+            with store.opened(key) as ds:
+                stage.output.validate(ds, stage=stage.name, port="output", values=False)
+        except SchemaError as exc:
+            return f"does not match the output schema of its stage ({exc})"
+        except (OSError, ValueError, RuntimeError) as exc:
+            return f"cannot be opened ({type(exc).__name__}: {exc})"
+    return None
+
+
+def _claim(store: Store, pending: list[str], keys: dict[str, str]) -> list[str]:
+    """Lock the keys of as many pending nodes as are free, without waiting; if none is free, wait for the first one
+    (holding no other lock while waiting, so concurrent runs cannot deadlock)."""
+    def acquire(name: str, blocking: bool) -> bool:
+        try:
+            return store.acquire(keys[name], blocking=blocking,
+                                 waiting=f"{name}: another run is computing this node")
+        except OSError as exc:
+            raise CacheError(f"node {name!r}: cannot lock its cache entry in {store.root}: {exc}") from exc
+
+    mine: list[str] = []
+    try:
+        for name in pending:
+            if acquire(name, blocking=False):
+                mine.append(name)
+        if not mine:
+            acquire(pending[0], blocking=True)
+            mine.append(pending[0])
+    except BaseException:  # e.g. KeyboardInterrupt while waiting: hand back what was taken
+        for name in mine:
+            store.release(keys[name])
+        raise
+    return mine
+
+
+class _Manifest:
+    """Best-effort updates of a pipeline's manifest: a failed write warns once (:class:`CacheWarning`) and the run
+    goes on, since the manifest only feeds ``status``'s explanations."""
+
+    def __init__(self, store: Store, pipeline: str):
+        self.store, self.pipeline, self.warned = store, pipeline, False
+
+    def note(self, provenances: dict[str, dict[str, Any]]) -> None:
+        try:
+            self.store.update_manifest(self.pipeline, provenances)
+        except (OSError, CacheError) as exc:
+            if not self.warned:
+                self.warned = True
+                warnings.warn(f"could not update the manifest of pipeline {self.pipeline!r} in cache "
+                              f"{self.store.root} ({exc}); results are unaffected, but `spflow status` may not "
+                              "explain why a node is stale", CacheWarning, stacklevel=3)
+
+
+def _run_serial(name, plan, prepare, finish, jobs, jb_backend, verbose) -> None:
+    ctx = StageContext(name, n_jobs=jobs, backend=jb_backend, verbose=verbose)
+    inputs = prepare(name)
+    if verbose:
+        print(f"[spflow] {name}: running {plan.stages[name].name} ...", file=sys.stderr)
+    try:
+        out, seconds = _execute(plan.stages[name], ctx, inputs)
+    except Exception as exc:
+        raise StageError(name, plan.stages[name].name, f"{type(exc).__name__}: {exc}") from exc
+    finish(name, out, seconds)
 
 
 def _run_graph(graph: nx.DiGraph, to_run: list[str], twins: dict[str, str]) -> nx.DiGraph:
@@ -296,15 +399,20 @@ def _run_parallel(generation, plan, prepare, finish, jobs, jb_backend, verbose) 
     extra = {"inner_max_num_threads": 1} if jb_backend == "loky" else {}
     with parallel_config(backend=jb_backend, **extra):
         outputs = Parallel(n_jobs=n_jobs, return_as="generator_unordered")(tasks)
-        failures = []
+        failures: list[tuple[str, Exception]] = []
         for name, out, seconds, error in outputs:
             if error is None:
-                finish(name, out, seconds)
+                try:
+                    finish(name, out, seconds)
+                except Exception as exc:  # invalid output or failed write: the siblings are still stored
+                    failures.append((name, exc))
             else:
-                failures.append((name, error))
+                exc, message = error
+                failure = StageError(name, plan.stages[name].name, message)
+                failure.__cause__ = exc
+                failures.append((name, failure))
     if failures:  # raised once every sibling has finished and been stored
-        name, (exc, message) = min(failures)
-        raise StageError(name, plan.stages[name].name, message) from exc
+        raise min(failures, key=lambda item: item[0])[1]
 
 
 def _tagged_execute(name: str, stage: Stage, ctx: StageContext, inputs: dict[str, xr.Dataset]):
@@ -335,12 +443,13 @@ def status(pipeline: Pipeline, *, cache: str | Path = ".spflow") -> list[NodeSta
     out = []
     for name in plan.order:
         key = plan.keys[name]
-        if store.verify(key):
+        problem = _entry_problem(store, key, plan.stages[name]) if store.has(key) else "is missing"
+        if problem is None:
             out.append(NodeStatus(name, plan.stages[name].name, key, True, []))
             continue
         upstream = dict(pipeline.nodes[name].inputs)
         reasons = stale_reasons(manifest.get(name), plan.prov[name], upstream)
         if store.has(key):
-            reasons = ["cache entry fails its checksum"]
+            reasons = [f"cache entry {problem}"]
         out.append(NodeStatus(name, plan.stages[name].name, key, False, reasons))
     return out

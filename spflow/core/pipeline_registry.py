@@ -13,7 +13,8 @@ optionally ``report(result, outdir)``; the first line of its docstring is its de
 
 In that order. ``SPFLOW_DISABLE_PLUGINS`` (see :mod:`spflow.core.plugins`) hides plugin pipelines as well: ``*``
 hides all of them, a comma-separated list hides those entry-point names. A built-in's name cannot be taken by a
-plugin (the plugin's pipeline is skipped with a warning).
+plugin (the plugin's pipeline is skipped with a warning). Problems of plugin pipelines (a module failing to import,
+``SystemExit`` included; a name taken twice) are :class:`~spflow.core.errors.PluginWarning` naming the plugin.
 """
 
 from __future__ import annotations
@@ -24,13 +25,13 @@ import importlib
 import importlib.metadata
 import os
 import runpy
-import sys
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .errors import SpflowError
+from .errors import PluginWarning, SpflowError
 
 __all__ = ["ENTRY_POINT_GROUP", "LOCAL_DIR", "PipelineInfo", "LoadedPipeline", "available_pipelines",
            "builtin_pipeline_dir", "load_pipeline_module"]
@@ -61,7 +62,7 @@ class LoadedPipeline:
 
 
 def _warn(message: str) -> None:
-    print(f"spflow: {message}", file=sys.stderr)
+    warnings.warn(message, PluginWarning, stacklevel=3)
 
 
 def builtin_pipeline_dir() -> Path:
@@ -129,7 +130,7 @@ def available_pipelines() -> list[PipelineInfo]:
     for name, ep in plugins.items():
         try:
             module = ep.load()
-        except Exception as exc:  # a broken third-party pipeline must not hide the others
+        except (Exception, SystemExit) as exc:  # a broken third-party pipeline must not hide the others
             _warn(f"pipeline {name!r} of plugin {_dist(ep)} failed to import ({ep.value}): {exc!r}")
             continue
         infos[name] = PipelineInfo(name, f"plugin {_dist(ep)}", _first_line(module.__doc__))
@@ -176,7 +177,7 @@ def load_pipeline_module(spec: str) -> LoadedPipeline:
         ep = plugins[spec]
         try:
             module = ep.load()
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:
             raise SpflowError(f"pipeline {spec!r} of plugin {_dist(ep)} failed to import ({ep.value}): "
                               f"{exc!r}") from exc
         return LoadedPipeline(vars(module), f"plugin {_dist(ep)} ({ep.value})")

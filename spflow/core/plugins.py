@@ -1,7 +1,16 @@
 """Plugin manager and the registries it fills.
 
 Built-in plugins are registered exactly like third-party ones (pytest/llm style); third-party plugins are found
-through the entry-point group ``spflow``. Environment knobs:
+through the entry-point group ``spflow``.
+
+A third-party plugin cannot take spflow down: one that fails to import (any exception, ``SystemExit`` included),
+that pluggy refuses (a hook with arguments its spec lacks), or that implements a hook spflow does not define (a
+misspelled name, which pluggy's ``check_pending`` would make fatal for everyone) is left out with a
+:class:`~spflow.core.errors.PluginWarning` naming its entry point and distribution. Each plugin's hook calls are
+isolated: its contributions are collected first and kept only if the call returns, so a raising hook contributes
+nothing (and warns), and a contribution spflow refuses (a stage name already taken) is skipped with a warning while
+the rest of the plugin stays. Plugins registered in-process with :func:`register_plugin` are the caller's own code:
+their errors are raised. Environment knobs:
 
 ``SPFLOW_DISABLE_PLUGINS``
     comma-separated entry-point names not to load (``*`` = no third-party plugins at all).
@@ -14,13 +23,15 @@ from __future__ import annotations
 import importlib.metadata
 import os
 import sys
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import pluggy
 
 from . import hashing
-from .errors import PipelineError, PluginError
+from .errors import PipelineError, PluginError, PluginWarning
 from .hookspecs import PROJECT_NAME, SpflowHookSpecs
 from .stage import Stage
 
@@ -53,34 +64,99 @@ def _provider_name(obj: Any) -> str:
     return str(module)
 
 
-def plugin_manager() -> pluggy.PluginManager:
-    """A fresh plugin manager with the built-ins and (unless disabled) the installed entry-point plugins."""
+def _describe(ep: importlib.metadata.EntryPoint) -> str:
+    """``plugin 'name' (module, distribution name version)``: what a warning about an entry-point plugin names."""
+    dist = getattr(ep, "dist", None)
+    origin = f"distribution {dist.name} {dist.version}" if dist is not None else "unknown distribution"
+    return f"plugin {ep.name!r} ({ep.value}, {origin})"
+
+
+def _leave_out(pm: pluggy.PluginManager, name: str, label: str, what: str) -> None:
+    warnings.warn(f"{label} {what}; spflow goes on without it (SPFLOW_DISABLE_PLUGINS={name} skips it)",
+                  PluginWarning, stacklevel=4)
+    if pm.get_plugin(name) is not None:
+        pm.unregister(name=name)
+
+
+def _unknown_hooks(pm: pluggy.PluginManager, name: str) -> list[str]:
+    """Hooks the plugin implements that no spec defines (what ``check_pending`` refuses)."""
+    plugin = pm.get_plugin(name)
+    return sorted(hook.name for hook in pm.get_hookcallers(plugin) or ()
+                  if not hook.has_spec() and any(impl.plugin is plugin and not impl.optionalhook
+                                                 for impl in hook.get_hookimpls()))
+
+
+def _load_plugins() -> tuple[pluggy.PluginManager, dict[str, str]]:
+    """A plugin manager with the built-ins, the installed entry-point plugins that load cleanly (unless disabled)
+    and the runtime ones; and, for the entry-point plugins, name -> the label warnings use."""
     pm = pluggy.PluginManager(PROJECT_NAME)
     pm.add_hookspecs(SpflowHookSpecs)
     for modname in BUILTIN_PLUGINS:
         module = __import__(modname, fromlist=["_"])
         pm.register(module, name=modname)
+    third_party: dict[str, str] = {}
     disabled = {s.strip() for s in os.environ.get("SPFLOW_DISABLE_PLUGINS", "").split(",") if s.strip()}
     if "*" not in disabled:
         for ep in importlib.metadata.entry_points(group=PROJECT_NAME):
             if ep.name in disabled or pm.get_plugin(ep.name) is not None:
                 continue
+            label = _describe(ep)
             try:
                 plugin = ep.load()
-            except Exception as exc:  # a broken third-party plugin must not take spflow down
-                print(f"spflow: plugin {ep.name!r} failed to load: {exc!r}", file=sys.stderr)
+            except (Exception, SystemExit) as exc:  # a broken third-party plugin must not take spflow down
+                _leave_out(pm, ep.name, label, f"failed to import: {type(exc).__name__}: {exc}")
                 continue
-            pm.register(plugin, name=ep.name)
+            try:
+                pm.register(plugin, name=ep.name)
+            except Exception as exc:  # pluggy's validation of its hook implementations
+                _leave_out(pm, ep.name, label, f"was refused by the plugin manager: {type(exc).__name__}: {exc}")
+                continue
+            unknown = _unknown_hooks(pm, ep.name)
+            if unknown:
+                known = ", ".join(sorted(n for n in vars(SpflowHookSpecs) if n.startswith("spflow_")))
+                _leave_out(pm, ep.name, label, f"implements unknown hook(s) {', '.join(unknown)} (misspelled? "
+                                               f"spflow's hooks: {known})")
+                continue
+            third_party[ep.name] = label
     for name, plugin in _RUNTIME_PLUGINS.items():
         pm.register(plugin, name=name)
-    pm.check_pending()
+    pm.check_pending()  # runtime plugins are the caller's own code: an unknown hook is an error
     if os.environ.get("SPFLOW_TRACE_PLUGINS"):
         pm.trace.root.setwriter(lambda msg: print(msg, end="", file=sys.stderr))
         pm.enable_tracing()
-    return pm
+    return pm, third_party
 
 
-def _build_registry(pm: pluggy.PluginManager) -> Registry:
+def plugin_manager() -> pluggy.PluginManager:
+    """A fresh plugin manager with the built-ins and (unless disabled) the installed entry-point plugins."""
+    return _load_plugins()[0]
+
+
+def _call_hook(pm: pluggy.PluginManager, third_party: dict[str, str], hookname: str,
+               register: Callable[..., None]) -> None:
+    """Call a ``register`` hook: the built-in and runtime plugins together (their errors propagate), then each
+    third-party plugin on its own, its contributions kept only if its call returns (else a warning)."""
+    others = [pm.get_plugin(name) for name in third_party]
+    pm.subset_hook_caller(hookname, remove_plugins=others)(register=register)
+    for name, label in third_party.items():
+        plugin = pm.get_plugin(name)
+        caller = pm.subset_hook_caller(hookname, remove_plugins=[p for p in pm.get_plugins() if p is not plugin])
+        staged: list[tuple[tuple, dict]] = []
+        try:
+            caller(register=lambda *args, **kwargs: staged.append((args, kwargs)))
+        except (Exception, SystemExit) as exc:
+            warnings.warn(f"{label}: hook {hookname} raised {type(exc).__name__}: {exc}; none of its contributions "
+                          "to that hook are used, spflow goes on with the rest", PluginWarning, stacklevel=3)
+            continue
+        for args, kwargs in staged:
+            try:
+                register(*args, **kwargs)
+            except Exception as exc:  # PluginError (a name taken, not a Stage), or what register_hasher refuses
+                warnings.warn(f"{label}: {hookname} contribution refused: {exc}; skipped, spflow goes on with the "
+                              "rest", PluginWarning, stacklevel=3)
+
+
+def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Registry:
     reg = Registry()
 
     def register_stage(cls: Any) -> None:
@@ -105,9 +181,9 @@ def _build_registry(pm: pluggy.PluginManager) -> Registry:
         reg.effects[name] = effect
         reg.providers["effect:" + name] = _provider_name(effect)
 
-    pm.hook.spflow_register_stages(register=register_stage)
-    pm.hook.spflow_register_effects(register=register_effect)
-    pm.hook.spflow_register_hashers(register=hashing.register_hasher)
+    _call_hook(pm, third_party, "spflow_register_stages", register_stage)
+    _call_hook(pm, third_party, "spflow_register_effects", register_effect)
+    _call_hook(pm, third_party, "spflow_register_hashers", hashing.register_hasher)
     return reg
 
 
@@ -118,7 +194,7 @@ def get_registry() -> Registry:
     """The process-wide registry (built on first use; ``reset_registry()`` rebuilds it)."""
     global _REGISTRY
     if _REGISTRY is None:
-        _REGISTRY = _build_registry(plugin_manager())
+        _REGISTRY = _build_registry(*_load_plugins())
     return _REGISTRY
 
 

@@ -54,7 +54,10 @@ class DatasetSchema:
     attrs: tuple[str, ...] = ()
     doc: str = ""
 
-    def validate(self, ds: Any, *, stage: str, port: str) -> None:
+    def validate(self, ds: Any, *, stage: str, port: str, values: bool = True) -> None:
+        """Raise :class:`SchemaError` if ``ds`` does not match; ``values=False`` checks the structure only (dims,
+        variables, dtypes, units, attrs) without reading the arrays (the finiteness check), e.g. on a lazily opened
+        cache entry."""
         where = f"stage {stage!r} port {port!r}"
         if not isinstance(ds, xr.Dataset):
             raise SchemaError(f"{where}: expected an xarray.Dataset, found {type(ds).__name__}")
@@ -84,7 +87,7 @@ class DatasetSchema:
                     raise SchemaError(f"{where} variable {name!r}: expected attrs['units'] = {spec.units!r}, found no units")
                 if spec.units and found != spec.units:
                     raise SchemaError(f"{where} variable {name!r}: expected units {spec.units!r}, found {found!r}")
-            if var.dtype.kind == "f" and not spec.allow_nan and not np.isfinite(var.values).all():
+            if values and var.dtype.kind == "f" and not spec.allow_nan and not np.isfinite(var.values).all():
                 raise SchemaError(f"{where} variable {name!r}: expected finite values, found NaN or inf")
 
     def describe(self) -> str:

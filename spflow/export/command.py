@@ -1,7 +1,7 @@
 """``spflow export opm`` and ``spflow compare opm``: the OPM Flow bridge from the command line.
 
     spflow export opm --schedule SCHEDULE [--params FILE] [--effect NAME=VALUE ...] --out DIR [--cells N]
-                      [--pv-step PV] [--area-scale X] [--rock-density KG_M3] [--approximate]
+                      [--pv-step PV] [--area-scale X] [--rock-density KG_M3] [--shear-sw SW] [--approximate]
     spflow compare opm (the same options) [--scheme upwind|tvd]
 
 ``SCHEDULE`` is a Table 2.5 name (``BCF1``..) or a TOML/JSON file ``{name = ..., slugs = [{pv, salinity_ppm,
@@ -33,6 +33,8 @@ def _common(p) -> None:
     p.add_argument("--pv-step", type=float, default=0.01, help="report/summary interval, PV (default 0.01)")
     p.add_argument("--area-scale", type=float, help="cross-section and rate scale (default: a 1e4 m2 section)")
     p.add_argument("--rock-density", type=float, default=2650.0, help="kg/m3, converts adsorption to kg/kg rock")
+    p.add_argument("--shear-sw", type=float, metavar="SW",
+                   help="water saturation at which shear thinning is matched in a two-phase core (default 1 - S2RWC)")
     p.add_argument("--approximate", action="store_true",
                    help="export mechanisms OPM cannot express with printed approximations instead of refusing")
 
@@ -88,7 +90,7 @@ def main(args: argparse.Namespace) -> int:
     """Run ``spflow export opm`` or ``spflow compare opm`` (``args.command``)."""
     schedule, params, effects = _inputs(args)
     out = Path(args.out)
-    options = {"area_scale": args.area_scale, "rock_density": args.rock_density}
+    options = {"area_scale": args.area_scale, "rock_density": args.rock_density, "shear_sw": args.shear_sw}
     if args.command == "export":
         from .opm_deck import write_opm_deck
 

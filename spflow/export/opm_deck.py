@@ -5,15 +5,16 @@ pseudo-volume and field-sized well tolerances), so the cross-section and the inj
 by ``area_scale``: the Darcy velocity, the pressure drop and every per-pore-volume quantity are unchanged, and only
 the volumes and rates of the summary carry the factor (the scaling is printed and stored in :class:`OpmDeck`).
 
-Wells: the injector sits in the first block (water rate, WPOLYMER concentration per slug), the producer in the
-last one (bottom-hole pressure). Their connection transmissibility factors are those of half a block, so the
-injector and producer BHPs are the pressures of the inlet and outlet faces and ``BHP_inj - BHP_prod`` is the
-pressure drop across the core as spflow computes it. Initial state: water at ``SWI``, pressure the steady oil-flow
-profile above the producer pressure (a uniform pressure equal to the producer BHP stalls OPM's first Newton step).
+Wells: the injector sits in the first block (water rate and WPOLYMER concentration per slug: a slug's
+``rate_ml_min`` or QINJ, scaled like the cross-section), the producer in the last one (bottom-hole pressure).
+Their connection transmissibility factors are those of half a block, so the injector and producer BHPs are the
+pressures of the inlet and outlet faces and ``BHP_inj - BHP_prod`` is the pressure drop across the core as spflow
+computes it. Initial state: water at ``SWI``, pressure the steady flow profile of the initial fluids at the first
+slug's rate above the producer pressure (a uniform pressure equal to the producer BHP stalls OPM's first Newton step).
 Water and oil are nearly incompressible (1e-7 1/bar); rock compressibility 1e-8 1/bar.
 
 Mechanisms OPM cannot express are refused or approximated (:mod:`.opm_mechanisms`); the tables are
-:mod:`.opm_tables`.
+:mod:`.opm_tables`, shear thinning (PLYSHLOG and the wells' bore diameter) :mod:`.opm_shear`.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.schedule import as_schedule
 
 from .opm_mechanisms import check_mechanisms, refuse_or_note
+from .opm_shear import SECONDS_PER_DAY, OpmShear, matching_bore_diameter, opm_shear
 from .opm_tables import KG_M3_PER_PPM, PA_PER_BAR, OpmTables, opm_tables
 
 __all__ = ["OpmDeck", "write_opm_deck", "DARCY_METRIC", "DEFAULT_AREA_M2"]
@@ -44,7 +46,6 @@ DEFAULT_AREA_M2 = 1.0e4
 _PRODUCER_BHP_BAR = 200.0
 _COMPRESSIBILITY = 1.0e-7  # 1/bar, water and oil
 _ROCK_COMPRESSIBILITY = 1.0e-8  # 1/bar
-_SECONDS_PER_DAY = 86400.0
 
 
 @dataclass(frozen=True)
@@ -55,14 +56,15 @@ class OpmDeck:
     cells: int
     area_scale: float  # scaled cross-section / core cross-section (= scaled rate / core rate)
     pore_volume_m3: float  # of the scaled model
-    rate_m3_day: float  # of the scaled model
-    pv_time_days: float  # time to inject one pore volume
+    slug_rate_m3_day: np.ndarray  # per slug, of the scaled model
+    slug_pv_time_days: np.ndarray  # per slug, time to inject one pore volume
     report_pv: np.ndarray  # injected PV at the end of every report step
     tables: OpmTables
     notes: list[str] = field(default_factory=list)
     experiment: str = "custom"
     params: dict[str, float] = field(default_factory=dict)  # the resolved forward-model parameters
     schedule: object = None  # the validated Schedule
+    shear: OpmShear | None = None  # PLYSHLOG, when shear thinning is exported
 
 
 def _fmt(x: float) -> str:
@@ -94,21 +96,22 @@ def _resolve(schedule, params, effects):
     return sched, p, s, foreign
 
 
-def _initial_pressure(p, tables, x_m, length_m) -> np.ndarray:
-    """Steady oil-flow pressures (bar) at the block centres ``x_m`` above the producer: a gradient, not a flat
-    field at the producer BHP."""
+def _initial_pressure(p, tables, x_m, length_m, rate_ml_min) -> np.ndarray:
+    """Steady pressures (bar) of the initial fluids at ``rate_ml_min`` at the block centres ``x_m`` above the
+    producer: a gradient, not a flat field at the producer BHP."""
     sw = tables.swof[:, 0]
     krw = np.interp(p["SWI"], sw, tables.swof[:, 1])
     kro = np.interp(p["SWI"], sw, tables.swof[:, 2])
     lam = krw / (p["VIS1"] * units.CP_TO_PA_S) + kro / (p["VIS2"] * units.CP_TO_PA_S)
-    u = p["QINJ"] * units.ML_MIN_TO_M3_S / (math.pi * p["DIAMETER"] ** 2 / 4.0)
+    u = rate_ml_min * units.ML_MIN_TO_M3_S / (math.pi * p["DIAMETER"] ** 2 / 4.0)
     grad = u / (p["PERM"] * units.MD_TO_M2 * max(lam, 1e-12)) / PA_PER_BAR  # bar/m
     return _PRODUCER_BHP_BAR + grad * (length_m - x_m)
 
 
 def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, *, approximate: bool = False,
                    area_scale: float | None = None, pv_step: float = 0.01, rock_density: float = 2650.0,
-                   swof_nodes: int = 401, polymer_nodes: int = 201, log=print) -> OpmDeck:
+                   swof_nodes: int = 401, polymer_nodes: int = 201, shear_sw: float | None = None,
+                   log=print) -> OpmDeck:
     """Write the OPM Flow deck of one coreflood to ``path`` (a ``.DATA`` file; its directory is created).
 
     ``schedule``, ``params`` and ``effects`` are those of :func:`spflow.simulate`. ``area_scale`` multiplies the
@@ -116,7 +119,8 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     report (and summary) interval in PV; ``rock_density`` (kg/m3) converts the adsorption to OPM's kg/kg rock.
     Mechanisms OPM cannot express raise :class:`~.opm_mechanisms.OpmExportError` (a ``ParameterError``) naming
     them, unless ``approximate`` -- then each approximation is printed through ``log`` and kept in
-    ``OpmDeck.notes``.
+    ``OpmDeck.notes``. ``shear_sw`` is the water saturation at which OPM's shear rate is matched to spflow's in a
+    two-phase core (default ``1 - S2RWC``; :mod:`.opm_shear`).
     """
     if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or not 3 <= cells <= 100000:
         raise ParameterError(f"cells must be an integer in [3, 100000], got {cells!r}")
@@ -124,7 +128,9 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     sched, p, s, foreign = _resolve(schedule, params, effects)
     pv_step = check_number("pv_step", pv_step, 0.0, sched.total_pv, lower_open=True)
     rock_density = check_number("rock_density (kg/m3)", rock_density, 500.0, 10000.0)
-    found = check_mechanisms(sched, p, s)
+    if shear_sw is not None:
+        shear_sw = check_number("shear_sw", shear_sw, p["S1RWC"], 1.0, lower_open=True)
+    found = check_mechanisms(sched, p, s, shear_sw)
     notes = refuse_or_note(found, approximate, log)
     if foreign:
         if not approximate:
@@ -133,6 +139,7 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
         notes.append(f"APPROXIMATION plugin effects {foreign} dropped")
         log(notes[-1])
     tables = opm_tables(sched, p, s, rock_density=rock_density, swof_nodes=swof_nodes, polymer_nodes=polymer_nodes)
+    shear = opm_shear(sched, p, s, tables, shear_sw=shear_sw)
 
     core_area = math.pi * p["DIAMETER"] ** 2 / 4.0
     if area_scale is None:
@@ -143,17 +150,32 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     length = p["LENGTH"]
     dx = length / cells
     pore_volume = p["PORO"] * area * length
-    rate = p["QINJ"] * units.ML_MIN_TO_M3_S * area_scale * _SECONDS_PER_DAY
-    t_pv = pore_volume / rate
-    scaling = (f"OPM deck: core cross-section {core_area * 1e4:.4g} cm2 and rate {p['QINJ']:g} ml/min scaled by "
-               f"{area_scale:.6g} to {area:.4g} m2 and {rate:.6g} m3/day (Darcy velocity, pressure drop and per-PV "
-               f"quantities unchanged); {cells} blocks of {dx * 1e3:.4g} mm; 1 PV = {t_pv:.6g} days")
+    rates_ml_min = sched.rates_ml_min(p["QINJ"])
+    rates = rates_ml_min * units.ML_MIN_TO_M3_S * area_scale * SECONDS_PER_DAY
+    t_pv = pore_volume / rates
+    rate_text = (f"rate {p['QINJ']:g} ml/min" if not sched.has_rates else
+                 f"slug rates {', '.join(f'{q:g}' for q in rates_ml_min)} ml/min")
+    scaling = (f"OPM deck: core cross-section {core_area * 1e4:.4g} cm2 and {rate_text} scaled by {area_scale:.6g} to "
+               f"{area:.4g} m2 and {', '.join(f'{r:.6g}' for r in rates)} m3/day (Darcy velocity, pressure drop and "
+               f"per-PV quantities unchanged); {cells} blocks of {dx * 1e3:.4g} mm; 1 PV = "
+               f"{', '.join(f'{t:.6g}' for t in t_pv)} days")
     log(scaling)
     notes.insert(0, scaling)
 
     x = (np.arange(cells) + 0.5) * dx
-    pressure = _initial_pressure(p, tables, x, length)
+    pressure = _initial_pressure(p, tables, x, length, rates_ml_min[0])
     half_block_cf = DARCY_METRIC * p["PERM"] * area / (0.5 * dx)
+    bore = "1*"  # OPM's default 1 ft
+    if shear is not None:
+        diameter = matching_bore_diameter(dx, side)
+        bore = _fmt(diameter)
+        shear_note = (f"OPM deck: shear thinning as PLYSHLOG ({shear.table.shape[0]} water velocities, reference "
+                      f"{shear.c_ref:g} kg/m3, half shear rate {shear.gamma_half:.6g} 1/s), spflow's shear rate = "
+                      f"{shear.rate_per_velocity:.6g} 1/m x OPM's water velocity at Sw* = {shear.reference_sw:g} "
+                      f"(Swcr = {shear.swcr:g}); well-bore diameter {diameter:.6g} m gives the wells' connections "
+                      "the blocks' water velocity")
+        log(shear_note)
+        notes.insert(1, shear_note)
     steps, report_pv = _report_steps(sched, pv_step)
     has_polymer = any(sl.polymer_ppm > 0.0 for sl in sched.slugs)
 
@@ -199,6 +221,12 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
       f"{_fmt(tables.max_adsorption)} /\n")
     w(f"PLYMAX\n  {_fmt(tables.c_max)} /\n")
     w("-- full Todd-Longstaff mixing: the polymer moves with the water at the mixture viscosity\nPLMIXPAR\n  1.0 /\n")
+    if shear is not None:
+        w(f"-- PLYSHLOG: shear thinning (Meter, Eq. 2.4, at UTCHEM's equivalent shear rate gamma = "
+          f"{shear.rate_per_velocity:.6g} 1/m x the water velocity at Sw* = {shear.reference_sw:g}): reference polymer "
+          "concentration (kg/m3); water velocity (m/day) mu_p(gamma) / mu_p0 at it\n"
+          f"PLYSHLOG\n  {_fmt(shear.c_ref)} /\n")
+        w(_table(shear.table))
 
     w("SOLUTION\n")
     w(f"SWAT\n  {cells}*{_fmt(p['SWI'])} /\n")
@@ -209,20 +237,20 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
 
     w("SCHEDULE\n")
     w("WELSPECS\n  'INJ' 'G' 1 1 1* WATER /\n  'PROD' 'G' {} 1 1* OIL /\n/\n".format(cells))
-    w(f"COMPDAT\n  'INJ' 1 1 1 1 OPEN 1* {_fmt(half_block_cf)} /\n"
-      f"  'PROD' {cells} 1 1 1 OPEN 1* {_fmt(half_block_cf)} /\n/\n")
+    w(f"COMPDAT\n  'INJ' 1 1 1 1 OPEN 1* {_fmt(half_block_cf)} {bore} /\n"
+      f"  'PROD' {cells} 1 1 1 OPEN 1* {_fmt(half_block_cf)} {bore} /\n/\n")
     w(f"WCONPROD\n  'PROD' OPEN BHP 5* {_fmt(_PRODUCER_BHP_BAR)} /\n/\n")
-    w(f"WCONINJE\n  'INJ' WATER OPEN RATE {_fmt(rate)} 1* 10000 /\n/\n")
-    for slug, sizes in zip(sched.slugs, steps):
+    for slug, sizes, rate, t_slug_pv in zip(sched.slugs, steps, rates, t_pv):
         w(f"-- slug {slug.name!r}: {slug.pv:g} PV, {slug.polymer_ppm:g} ppm polymer\n")
+        w(f"WCONINJE\n  'INJ' WATER OPEN RATE {_fmt(rate)} 1* 10000 /\n/\n")
         if has_polymer:
             w(f"WPOLYMER\n  'INJ' {_fmt(slug.polymer_ppm * KG_M3_PER_PPM)} 0.0 /\n/\n")
-        w("TSTEP\n  " + " ".join(_fmt(d * t_pv) for d in sizes) + " /\n")
+        w("TSTEP\n  " + " ".join(_fmt(d * t_slug_pv) for d in sizes) + " /\n")
     w("END\n")
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(out))
-    return OpmDeck(path=path, cells=cells, area_scale=area_scale, pore_volume_m3=pore_volume, rate_m3_day=rate,
-                   pv_time_days=t_pv, report_pv=report_pv, tables=tables, notes=notes, experiment=sched.name,
-                   params=dict(p), schedule=sched)
+    return OpmDeck(path=path, cells=cells, area_scale=area_scale, pore_volume_m3=pore_volume, slug_rate_m3_day=rates,
+                   slug_pv_time_days=t_pv, report_pv=report_pv, tables=tables, notes=notes, experiment=sched.name,
+                   params=dict(p), schedule=sched, shear=shear)

@@ -6,7 +6,9 @@ resistance factor acting through the adsorbed amount and rock density (PLYROCK).
 salinity dependence of the polymer viscosity beyond one fixed table, no physical dispersion, no capillary
 desaturation and no kinetic adsorption. :func:`check_mechanisms` lists every mechanism of the resolved model that
 is active and outside that set; :func:`approximations` turns each into the printed approximation made when the
-caller passes ``approximate=True``. Shear thinning (PLYSHLOG) is not mapped yet: it is refused as well.
+caller passes ``approximate=True``. Shear thinning is exported as PLYSHLOG (:mod:`.opm_shear`), exactly when the
+water saturation cannot change and the half shear rate does not depend on the concentration; otherwise the
+saturation (and concentration) at which it is matched is an approximation listed here.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ from dataclasses import dataclass
 
 from spflow.core.errors import ParameterError
 from spflow.plugins.forward import units
+
+from .opm_shear import shear_reference_saturation
 
 __all__ = ["Mechanism", "check_mechanisms", "refuse_or_note", "OpmExportError"]
 
@@ -37,9 +41,30 @@ def _polymer_salinities(sched) -> set[float]:
     return {s.salinity_ppm for s in sched.slugs if s.polymer_ppm > 0.0}
 
 
-def check_mechanisms(sched, p: dict[str, float], s: dict[str, float]) -> list[Mechanism]:
+def _shear_mechanisms(p: dict[str, float], shear_sw: float | None) -> list[Mechanism]:
+    """The parts of Meter shear thinning that PLYSHLOG reproduces only approximately (:mod:`.opm_shear`)."""
+    found = []
+    sw_ref, exact = shear_reference_saturation(p, shear_sw)
+    if not exact:
+        found.append(Mechanism(
+            "shear_thinning_saturation", "OPM's shear multiplier is a function of the water velocity u_w / (phi (Sw - "
+            "Swcr)), spflow's Meter law (Eq. 2.4) of the shear rate GAMMAC u_w / sqrt(k krw phi Sw); their ratio "
+            f"depends on the water saturation, which varies (SWI = {p['SWI']:g} < 1 - S2RWC)",
+            f"velocity table matched at Sw* = {sw_ref:g}: the shear rate is exact there and off by C(Sw*) / C(Sw), "
+            "C(Sw) = (Sw - Swcr) / sqrt(krw(Sw) Sw), elsewhere"))
+    if p["IGAMHF"] > 0.0 and p["A2"] != 0.0:
+        found.append(Mechanism(
+            "shear_thinning_concentration", f"the half shear rate of Eq. 2.5 depends on the polymer concentration "
+            f"(IGAMHF = 1, A2 = {p['A2']:g}); OPM's PLYSHLOG multiplier does not",
+            "half shear rate at the largest injected polymer concentration (the PLYSHLOG reference) everywhere"))
+    return found
+
+
+def check_mechanisms(sched, p: dict[str, float], s: dict[str, float], shear_sw: float | None = None) -> list[Mechanism]:
     """Every active mechanism of schedule ``sched``, resolved parameters ``p`` and effect strengths ``s`` that OPM
-    Flow's polymer model cannot express (an empty list: the export is exact up to table interpolation)."""
+    Flow's polymer model cannot express (an empty list: the export is exact up to table interpolation);
+    ``shear_sw`` is the saturation at which shear thinning is matched
+    (:func:`.opm_shear.shear_reference_saturation`)."""
     found = []
     has_polymer = any(sl.polymer_ppm > 0.0 for sl in sched.slugs)
     surf = [sl.name for sl in sched.slugs if sl.surfactant_ppm > 0.0]
@@ -63,10 +88,8 @@ def check_mechanisms(sched, p: dict[str, float], s: dict[str, float]) -> list[Me
                 "connate_salinity", f"the connate brine (C50 = {p['C50']:g}, C60 = {p['C60']:g} meq/ml) differs from "
                 f"the polymer slugs' brine ({anions:.4g}, {divalent:.4g} meq/ml at {poly[0]:g} ppm); polymer meeting "
                 "connate water sees another viscosity in spflow", "the polymer slugs' salinity everywhere"))
-    if has_polymer and s["shear_thinning"] > 0.0:
-        found.append(Mechanism(
-            "shear_thinning", f"effect shear_thinning = {s['shear_thinning']:g} (Meter law, Eq. 2.4); the export does "
-            "not map it to PLYSHLOG", "Newtonian polymer solution at its zero-shear viscosity (Eq. 2.1)"))
+    if has_polymer and s["shear_thinning"] > 0.0 and p["GAMMAC"] > 0.0:
+        found += _shear_mechanisms(p, shear_sw)
     disp = [n for n in ("ALPHAL1", "ALPHAL2", "ALPHAL3", "DMOL") if p[n] > 0.0]
     if s["dispersion"] > 0.0 and disp:
         found.append(Mechanism(

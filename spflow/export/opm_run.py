@@ -32,12 +32,15 @@ from .opm_deck import OpmDeck
 from .opm_tables import KG_M3_PER_PPM, PA_PER_BAR
 
 __all__ = ["OpmNotFoundError", "OpmRunError", "flow_executable", "run_opm", "summary_to_coreflood",
-           "summary_to_series", "FLOW_OPTIONS"]
+           "summary_to_series", "FLOW_OPTIONS", "SHEAR_FLOW_OPTIONS"]
 
 #: options of every run: no rate-initialisation heuristic (it aborts polymer runs with an "infinite primary
 #: variable"), no restart/grid output beyond what the summary needs, one thread.
 FLOW_OPTIONS = ("--alternative-well-rate-init=false", "--enable-opm-rst-file=false", "--enable-async-ecl-output=false",
                 "--threads-per-process=1")
+#: added when the deck shears its polymer (PLYSHLOG): OPM's polymer mass balance then converges linearly (about
+#: x0.75 per Newton iteration) and the default 20 iterations chop most steps and shut the wells
+SHEAR_FLOW_OPTIONS = ("--newton-max-iterations=40",)
 
 
 class OpmNotFoundError(SpflowError):
@@ -71,7 +74,7 @@ def _intervals(summary: dict[str, np.ndarray], deck: OpmDeck) -> dict[str, np.nd
     out = {
         "pv_end": summary["FWIT"] / deck.pore_volume_m3,
         "oil_cut": np.clip(np.where(produced > 0.0, d_oil / np.where(produced > 0.0, produced, 1.0), 0.0), 0.0, 1.0),
-        "recovery": np.clip(fopt / ooip, 0.0, 1.0),
+        "recovery": np.clip(fopt / ooip, 0.0, 1.0) if ooip > 0.0 else np.zeros_like(fopt),  # no oil: 0
         "oil_ml": np.maximum(d_oil, 0.0) / deck.area_scale * 1.0e6,
         "dp": (summary["WBHP:INJ"] - summary["WBHP:PROD"]) * PA_PER_BAR,
         "ooip_ml": ooip / deck.area_scale * 1.0e6,
@@ -147,7 +150,8 @@ def run_opm(deck: OpmDeck, workdir=None, *, form: str = "coreflood", extra_optio
         deck_copy = run_dir / deck.path.name
         if deck_copy.resolve() != deck.path.resolve():
             shutil.copyfile(deck.path, deck_copy)
-        cmd = [exe, deck_copy.name, "--output-dir=.", *FLOW_OPTIONS, *extra_options]
+        shear = SHEAR_FLOW_OPTIONS if deck.shear is not None else ()
+        cmd = [exe, deck_copy.name, "--output-dir=.", *FLOW_OPTIONS, *shear, *extra_options]
         try:
             proc = subprocess.run(cmd, cwd=run_dir, capture_output=True, text=True, timeout=timeout_s)
         except subprocess.TimeoutExpired:

@@ -1,4 +1,4 @@
-"""Read an injection schedule (thesis Table 2.5 style) from a TOML file.
+"""Read and write an injection schedule (thesis Table 2.5 style) as a TOML file.
 
 Format::
 
@@ -16,12 +16,13 @@ Every error is a ``ValueError`` naming the file (and the slug and field, from th
 
 from __future__ import annotations
 
+import json
 import tomllib
 from pathlib import Path
 
 from spflow.plugins.forward.schedule import Schedule, as_schedule
 
-__all__ = ["read_schedule_file"]
+__all__ = ["read_schedule_file", "schedule_toml", "write_schedule_file"]
 
 
 def read_schedule_file(path) -> Schedule:
@@ -43,3 +44,29 @@ def read_schedule_file(path) -> Schedule:
         return as_schedule({"name": table.get("name", path.stem), "slugs": table["slugs"]})
     except ValueError as exc:
         raise ValueError(f"schedule file {str(path)!r}: {exc}") from None
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a valid TOML basic string
+    return repr(float(value))
+
+
+def schedule_toml(schedule) -> str:
+    """The TOML text of ``schedule`` (anything ``as_schedule`` accepts) in the format above; ``rate_ml_min`` is
+    written only for slugs that set their own rate. :func:`read_schedule_file` reads it back unchanged."""
+    sched = as_schedule(schedule)
+    lines = [f"name = {_toml_value(sched.name)}"]
+    for s in sched.slugs:
+        lines += ["", "[[slugs]]", f"name = {_toml_value(s.name)}"]
+        fields = ("pv", "salinity_ppm", "surfactant_ppm", "polymer_ppm") + (() if s.rate_ml_min is None
+                                                                             else ("rate_ml_min",))
+        lines += [f"{f} = {_toml_value(getattr(s, f))}" for f in fields]
+    return "\n".join(lines) + "\n"
+
+
+def write_schedule_file(schedule, path) -> Path:
+    """Write ``schedule`` as a TOML schedule file (:func:`schedule_toml`) to ``path``; returns the path."""
+    path = Path(path)
+    path.write_text(schedule_toml(schedule))
+    return path

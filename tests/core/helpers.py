@@ -18,12 +18,14 @@ def toy_plugin() -> Iterator[None]:
         spflow.unregister_plugin("toy_stages")
 
 
-def chain(log: str, value: float = 1.0, factor: float = 2.0) -> spflow.Pipeline:
-    """a (source) -> b (scale) -> c (scale); d (source) independent; e = add(c, d)."""
+def chain(log: str, value: float = 1.0, factor: float = 2.0, delay: float = 0.0) -> spflow.Pipeline:
+    """a (source) -> b (scale) -> c (scale); d (source) independent; e = add(c, d). Sources and scales sleep
+    ``delay`` seconds."""
+    slow = {"delay": delay} if delay else {}
     p = spflow.Pipeline("chain")
-    p.add("a", "toy_source", params={"value": value, "log": log})
-    p.add("b", "toy_scale", inputs={"data": "a"}, params={"factor": factor, "log": log})
-    p.add("c", "toy_scale", inputs={"data": "b"}, params={"factor": 3.0, "log": log})
-    p.add("d", "toy_source", params={"value": 5.0, "log": log})
+    p.add("a", "toy_source", params={"value": value, "log": log, **slow})
+    p.add("b", "toy_scale", inputs={"data": "a"}, params={"factor": factor, "log": log, **slow})
+    p.add("c", "toy_scale", inputs={"data": "b"}, params={"factor": 3.0, "log": log, **slow})
+    p.add("d", "toy_source", params={"value": 5.0, "log": log, **slow})
     p.add("e", "toy_add", inputs={"a": "c", "b": "d"}, params={"log": log})
     return p

@@ -3,6 +3,7 @@ across processes."""
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -32,9 +33,11 @@ class Source(Stage):
         "value": Param(float, 1.0, bounds=(-100.0, 100.0), unit="m"),
         "n": Param(int, 5, bounds=(1, 10_000)),
         "log": Param(str, ""),
+        "delay": Param(float, 0.0, bounds=(0.0, 10.0), unit="s", doc="sleep this long (to overlap concurrent runs)"),
     }
 
     def run(self, ctx, **inputs):
+        time.sleep(self.params["delay"])
         _log(self.params["log"], f"source:{self.params['value']}")
         y = self.params["value"] * np.arange(self.params["n"], dtype=float)
         return xr.Dataset({"y": ("x", y, {"units": "m"})})
@@ -45,9 +48,11 @@ class Scale(Stage):
     description = "y * factor"
     inputs = {"data": SERIES}
     output = SERIES
-    params = {"factor": Param(float, 2.0, bounds=(0.0, 10.0)), "log": Param(str, "")}
+    params = {"factor": Param(float, 2.0, bounds=(0.0, 10.0)), "log": Param(str, ""),
+              "delay": Param(float, 0.0, bounds=(0.0, 10.0), unit="s")}
 
     def run(self, ctx, data):
+        time.sleep(self.params["delay"])
         _log(self.params["log"], f"scale:{self.params['factor']}")
         return data * self.params["factor"]
 

@@ -59,6 +59,17 @@ def test_export_refuses_missing_mechanisms_with_a_clear_message(files, capsys):
     assert not (files / "x" / "CORE.DATA").exists()
 
 
+def test_export_shear_thinning_at_a_chosen_saturation(files, capsys):
+    out = files / "shear"
+    rc = main(["export", "opm", "--schedule", str(files / "s.toml"), "--params", str(files / "p.toml"),
+               "--effect", "capillary_desaturation=0", "--effect", "shear_thinning=1", "--approximate",
+               "--shear-sw", "0.6", "--out", str(out), "--cells", "20"])
+    assert rc == 0
+    printed = capsys.readouterr().out
+    assert "APPROXIMATION shear_thinning_saturation" in printed and "Sw* = 0.6" in printed
+    assert "PLYSHLOG" in (out / "CORE.DATA").read_text()
+
+
 def test_bad_effect_argument(files, capsys):
     rc = main(["export", "opm", "--schedule", "BCF1", "--effect", "shear_thinning", "--out", str(files / "y")])
     assert rc == 2

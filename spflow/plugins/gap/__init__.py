@@ -6,5 +6,6 @@ and measurement model), ``error_model`` (AR(1) whitening), ``layout`` (observati
 forward model through the measurement chain), ``least_squares`` / ``base_calibration`` (calibration),
 ``localisation`` and ``signatures`` (where), ``fingerprints`` and ``candidates`` (which), ``predictive_scores`` and
 ``verdict`` (decision), ``quantification`` (how far), ``diagnosis`` (the procedure), ``report`` / ``figures``
-(output), ``stage`` and ``command`` (entry points).
+(output), ``stage`` and ``command`` (entry points); ``design_space``, ``next_experiment``, ``proposal`` and
+``design_check`` (the coreflood that would separate ambiguous candidates, ``docs/next_experiment.md``).
 """
