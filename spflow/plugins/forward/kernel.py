@@ -28,8 +28,8 @@ GIL, numba has no clock); the failing cell reported is the one that limits the n
 Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status`` is a ``state_layout`` error code and
 ``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell; ``stats[N_STATS]`` counts the step
 halvings (``ST_HALVINGS``), the steps whose stable step was set by the capillary-diffusion term rather than the
-wave speed (``ST_CAPILLARY``) and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component, the
-amount in place at the start, injected, produced and in place at the end (PV units), for the mass balance.
+wave speed (``ST_CAPILLARY``) and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component,
+the amount in place at the start, injected, produced and in place at the end (PV units), for the mass balance.
 """
 
 import math
@@ -203,7 +203,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     ``flow[2, slugs]`` = Darcy velocity (m/s) and time per PV (s) of each slug (``kernel_inputs.slug_flow``);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
     profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number; ``max_steps`` the step
-budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step).
+    budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
