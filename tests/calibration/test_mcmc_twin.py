@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from spflow.core.stage import StageContext
-from spflow.plugins.calibration.diagnostics import summary
+from spflow.plugins.calibration.diagnostics import geweke_familywise, summary
 from spflow.plugins.calibration.mh_sampler import MHSampler
 from spflow.plugins.calibration.posterior_predictive import PosteriorPredictive
 from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
@@ -54,11 +54,14 @@ def test_reduced_clean_twin(tmp_path):
     posterior = MHSampler(samples=24_000, burn=6_000, thin=5, chains=3, seed=5).run(
         ctx, surrogate=surrogate, observations=observations, space=space)
     table = summary(posterior)
+    # Geweke: the family-wise level of the len(FREE) z-scores (Bonferroni, alpha = 0.01: a converged sampler
+    # fails this check in 1 % of runs; per-parameter |z| < 2 would fail a converged one in 1 - 0.954^k of runs)
+    z_limit = geweke_familywise(table["geweke_z"].values, alpha=0.01)["bonferroni_z"]
     for name in FREE:
         row = table.sel(param=name)
         assert float(row.q025) <= truth[name] <= float(row.q975), (name, float(row.q025), float(row.q975))
-        assert float(row.rhat) < 1.01 and abs(float(row.geweke_z)) < 2.0, (name, float(row.rhat),
-                                                                             float(row.geweke_z))
+        assert float(row.rhat) < 1.01 and abs(float(row.geweke_z)) < z_limit, (name, float(row.rhat),
+                                                                                 float(row.geweke_z), z_limit)
         # the data pin these parameters down: the posterior is much narrower than the prior box
         assert float(row.sd) < 0.2 * (TABLE_4_1[name][1] - TABLE_4_1[name][0]) / np.sqrt(12)
     bands = PosteriorPredictive(experiments=["BCF2"], draws=80, fixed=fixed, cells=CELLS, seed=6).run(
