@@ -52,8 +52,9 @@ def test_joint_run_count_dims_units_and_finiteness(joint):
 def test_ignored_parameter_has_zero_indices_and_is_not_selected(joint):
     ad31 = joint.sel(param="AD31")
     assert (ad31["S1"].values == 0).all() and (ad31["ST"].values == 0).all()
-    assert np.nansum(np.abs(joint["S2"].sel(param="AD31").values)) == 0.0
-    assert np.nansum(np.abs(joint["S2"].sel(param_j="AD31").values)) == 0.0
+    # second-order indices combine several estimator terms: an inert parameter leaves round-off (~1e-16) there
+    assert np.nansum(np.abs(joint["S2"].sel(param="AD31").values)) <= 1e-12
+    assert np.nansum(np.abs(joint["S2"].sel(param_j="AD31").values)) <= 1e-12
     assert not bool(ad31["selected"])
     # the two active parameters carry the variance: their total indices add up to at least ~1
     active = joint[["ST", "ST_conf"]].sel(param=["HBNC70", "E2C"]).sum("param")
