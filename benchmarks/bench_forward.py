@@ -34,6 +34,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 from joblib import Parallel, delayed  # noqa: E402
 
 from spflow.plugins.forward import kernel as KR  # noqa: E402
+from spflow.plugins.forward import output_records as R  # noqa: E402
 from spflow.plugins.forward import state_layout as SL  # noqa: E402
 from spflow.plugins.forward import transport as TR  # noqa: E402
 from spflow.plugins.forward.parameters import default_params  # noqa: E402
@@ -90,7 +91,7 @@ def kernel_array_bytes(cells: int, n_out: int) -> int:
     """Bytes of the arrays the compiled kernel allocates (state, properties, fluxes, scratch, outputs)."""
     # + new[6], six dispersion work arrays of N_DISP rows, the pressure profile
     per_cell = SL.NST + SL.NPR + TR.NFLUX + 6 + 6 * KR.N_DISP + 1
-    return 8 * (cells * per_cell + TR.NFLUX + KR.N_DISP + KR.N_SERIES * n_out + 4 * 6 + KR.N_INFO + 6)
+    return 8 * (cells * per_cell + TR.NFLUX + KR.N_DISP + R.N_SERIES * n_out + 4 * 6 + KR.N_INFO + 6)
 
 
 def _prior_draw(seed: int) -> dict:

@@ -32,9 +32,9 @@ def run(schedule: str, cells: int, courant: float) -> tuple[np.ndarray, int, flo
     """``(series, steps, kernel CPU seconds, worst mass-balance residual)`` of one TVD run at any Courant number."""
     sched, resolved, strengths, _, cells, pv_step, prof, _ = _validate(schedule, None, cells, None, "tvd", 0.01,
                                                                        None, 0.5)
-    prm, end_pv, inj, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
+    prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     start = time.process_time()
-    status, info, steps, series, _, totals = run_kernel(prm, end_pv, inj, out_pv, prof, cells, True, courant)
+    status, info, steps, series, _, totals = run_kernel(prm, end_pv, inj, flow, out_pv, prof, cells, True, courant)
     cpu = time.process_time() - start
     if status != 0:
         raise RuntimeError(f"{schedule} at {cells} cells, Courant {courant}: kernel status {status}, info {info}")

@@ -3,7 +3,7 @@
 A "clean twin" has its truth inside the prior box (here Table 4.1, which lies inside Table 3.2), no withheld
 mechanism (the model's own default effects) and measurement noise only (``NoiseModel`` with random transducer,
 oil-reading and assay errors but zero offset, drift and dead volume). The script writes BCF1-3 twins to netCDF
-files, runs ``pipelines/bayesian_calibration.py`` on them (PCE on BCF1, MCMC on BCF1's dp and oil cut, simulator on
+files, runs the ``bayesian_calibration`` pipeline on them (PCE on BCF1, MCMC on BCF1's dp and oil cut, simulator on
 posterior draws for BCF1-3) and prints
 
 * the coverage of the held-out BCF2/BCF3 observations (dp and oil cut pooled) by the 90 % posterior predictive band
@@ -23,7 +23,6 @@ returns the numbers.
 from __future__ import annotations
 
 import argparse
-import runpy
 import sys
 import tempfile
 import time
@@ -31,10 +30,9 @@ from pathlib import Path
 
 
 import spflow
+from spflow.pipelines import bayesian_calibration
 from spflow.plugins.calibration.diagnostics import summary
 from spflow.synthetic import NoiseModel, write_twins
-
-PIPELINES = Path(__file__).resolve().parent.parent / "pipelines"
 
 #: The twin's truth: inside Table 4.1, away from its bounds and from the model defaults.
 TRUTH = {"ALPHAV2": 2.7, "HBNC70": 0.031, "HBNC71": 0.0175, "AD31": 0.42, "GAMHF": 63.0, "CRK": 0.074,
@@ -46,19 +44,18 @@ CLEAN_NOISE = NoiseModel.random_only()
 
 def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 2, noise_seed: int = 7, **settings) -> dict:
     """Run the Bayesian pipeline on clean twins and return the acceptance numbers (module docstring)."""
-    bc = runpy.run_path(str(PIPELINES / "bayesian_calibration.py"))
     data_dir = Path(outdir or tempfile.mkdtemp(prefix="twin_bayesian_"))
     data_dir.mkdir(parents=True, exist_ok=True)
     observed = write_twins(data_dir, TRUTH, noise=CLEAN_NOISE, seed=noise_seed, cells=settings.get("cells", 100))
     start = time.perf_counter()
-    result = spflow.run(bc["pipeline"](observed=observed, **settings), cache=cache, jobs=jobs)
+    result = spflow.run(bayesian_calibration.pipeline(observed=observed, **settings), cache=cache, jobs=jobs)
     seconds = time.perf_counter() - start
     posterior, bands = result["posterior"], result["predictive"]
     table = summary(posterior)
     inside = {str(n): bool(table["q025"].sel(param=n) <= TRUTH[str(n)] <= table["q975"].sel(param=n))
               for n in table["param"].values}
-    lines = bc["report"](result, data_dir, truth=TRUTH) if outdir else []
-    return {"coverage_heldout": bc["held_out_coverage"](bands), "truth_inside": inside,
+    lines = bayesian_calibration.report(result, data_dir, truth=TRUTH) if outdir else []
+    return {"coverage_heldout": bayesian_calibration.held_out_coverage(bands), "truth_inside": inside,
             "geweke_z": {str(n): float(table["geweke_z"].sel(param=n)) for n in table["param"].values},
             "rhat": {str(n): float(table["rhat"].sel(param=n)) for n in table["param"].values},
             "ess_bulk": {str(n): float(table["ess_bulk"].sel(param=n)) for n in table["param"].values},

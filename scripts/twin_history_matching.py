@@ -2,7 +2,7 @@
 
 A "clean twin" has its truth inside the Table 3.2 ranges, no withheld mechanism (the model's own default effects) and
 measurement noise only (``NoiseModel`` with random transducer, oil-reading and assay errors but zero offset, drift
-and dead volume). The script writes BCF1-3 twins to netCDF files, runs ``pipelines/history_matching.py`` on them
+and dead volume). The script writes BCF1-3 twins to netCDF files, runs the ``history_matching`` pipeline on them
 (PCE on BCF1, NSGA-II, simulator checks on BCF2/BCF3), and prints
 
 * the relative L2 misfits on the held-out BCF2/BCF3 of the simulator at the final Pareto set and at the truth itself
@@ -22,7 +22,6 @@ calls.
 from __future__ import annotations
 
 import argparse
-import runpy
 import sys
 import tempfile
 import time
@@ -32,11 +31,10 @@ import numpy as np
 
 import spflow
 from spflow.core.stage import StageContext
+from spflow.pipelines import history_matching
 from spflow.plugins.calibration.nsga2_heldout import HeldOutCheck
 from spflow.plugins.forward.stage import Forward
 from spflow.synthetic import NoiseModel, write_twins
-
-PIPELINES = Path(__file__).resolve().parent.parent / "pipelines"
 
 #: The twin's truth: inside Table 3.2, away from the bounds and from the model defaults.
 TRUTH = {"ALPHAV2": 1.2, "HBNC70": 0.036, "HBNC71": 0.0135, "AD31": 0.8, "GAMHF": 72.0, "CRK": 0.066,
@@ -49,12 +47,11 @@ CLEAN_NOISE = NoiseModel.random_only()
 def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 1, noise_seed: int = 11, **settings) -> dict:
     """Run the history-matching pipeline on clean twins (measurement noise seeded by ``noise_seed``) and return the
     acceptance numbers (see module doc)."""
-    hm = runpy.run_path(str(PIPELINES / "history_matching.py"))
     cells = settings.get("cells", 100)
     data_dir = Path(cache) / f"twin_data_{noise_seed}"
     data_dir.mkdir(parents=True, exist_ok=True)
     paths = write_twins(data_dir, TRUTH, noise=CLEAN_NOISE, seed=noise_seed, cells=cells)
-    p = hm["pipeline"](observed=paths, **settings)
+    p = history_matching.pipeline(observed=paths, **settings)
     t0 = time.perf_counter()
     result = spflow.run(p, cache=cache, jobs=jobs)
     seconds = time.perf_counter() - t0
@@ -70,7 +67,7 @@ def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 1, noise_see
     point_ratio = pareto.mean(axis=(1, 2)) / truth_misfit.mean()
     if outdir is not None:
         outdir.mkdir(parents=True, exist_ok=True)
-        hm["report"](result, outdir, truth=TRUTH)
+        history_matching.report(result, outdir, truth=TRUTH)
     return {
         "seconds": seconds, "executed": list(result.executed), "calibration": cal,
         "observations": result["observations"],

@@ -1,28 +1,28 @@
 """The ``spflow`` command: run, status, report, list, clean, diagnose.
 
-    spflow run PIPELINE [--quick] [--until NODE] [--only NODE] [--force NODE] [--jobs N]
+    spflow run PIPELINE [--quick] [--set NODE.PARAM=VALUE ...] [--until NODE] [--only NODE] [--force NODE] [--jobs N]
                         [--backend loky|threads|dask] [--scheduler ADDRESS] [--cache DIR] [--out DIR]
-    spflow status PIPELINE [--quick] [--cache DIR]
-    spflow report PIPELINE [--quick] [--cache DIR] [--out DIR]
-    spflow list [stages|effects|params]
+    spflow status PIPELINE [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
+    spflow report PIPELINE [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR] [--out DIR]
+    spflow list [pipelines|stages|effects|params]
     spflow clean [--cache DIR] [--tmp]
     spflow diagnose --observations FILE [FILE ...] [--heldout FILE ...] --base CONFIG [--catalogue NAMES]
                     [--out DIR] [--jobs N]
 
-PIPELINE is a path to a Python file, a name in ``./pipelines/`` (``demo`` -> ``pipelines/demo.py``) or a dotted
-module; the module defines ``pipeline`` (a Pipeline or a function returning one) and optionally
-``report(result, outdir)``, called after a successful run; ``report.html`` (:mod:`spflow.core.html_report`) is
-written next to the figures it makes. ``--quick`` passes ``quick=True`` to ``pipeline`` when it takes it: the
-pipeline's small-budget profile.
+PIPELINE is a path to a Python file, a name in ``./pipelines/`` (``demo`` -> ``pipelines/demo.py``), the name of a
+built-in or plugin pipeline (``spflow list pipelines``) or a dotted module (:mod:`spflow.core.pipeline_registry`);
+the module defines ``pipeline`` (a Pipeline or a function returning one) and optionally ``report(result, outdir)``,
+called after a successful run; ``report.html`` (:mod:`spflow.core.html_report`) is written next to the figures it
+makes. ``--quick`` passes ``quick=True`` to ``pipeline`` when it takes it: the pipeline's small-budget profile.
+``--set node.param=value`` overrides one node's parameter (:mod:`spflow.core.overrides`).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import inspect
 import json
-import runpy
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -30,25 +30,14 @@ from typing import Any
 from spflow.core.errors import SpflowError
 from spflow.core.executor import BACKENDS, run, status
 from spflow.core.hashing import canonical_hash
-from spflow.core.html_report import provenance_rows, sections_from, write_html_report
+from spflow.core.html_report import Section, provenance_rows, sections_from, write_html_report
+from spflow.core.overrides import apply_overrides
 from spflow.core.pipeline import Pipeline
+from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
 from spflow.core.plugins import get_registry
 from spflow.plugins.gap.command import add_parser as add_diagnose_parser
 from spflow.plugins.gap.command import main as diagnose_command
-
-
-def load_pipeline_module(spec: str) -> dict[str, Any]:
-    """Namespace of the pipeline module named by ``spec`` (file path, ``pipelines/`` name or dotted module)."""
-    path = Path(spec)
-    if path.suffix == ".py" and path.is_file():
-        return runpy.run_path(str(path))
-    local = Path("pipelines") / f"{spec}.py"
-    if local.is_file():
-        return runpy.run_path(str(local))
-    try:
-        return vars(importlib.import_module(spec))
-    except ImportError:
-        raise SpflowError(f"pipeline {spec!r} not found: not a .py file, not pipelines/{spec}.py, not a module") from None
+from spflow.export.command import add_parser as add_export_parser, main as export_command
 
 
 def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) -> Pipeline:
@@ -62,26 +51,38 @@ def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) ->
     return obj
 
 
-def _report_fingerprint(namespace: dict[str, Any], result) -> str:
-    """What a report depends on: every node's key and the pipeline modules' sources (the file and its siblings)."""
-    sources = {}
+def _load(args: argparse.Namespace) -> tuple[dict[str, Any], Pipeline, list[str]]:
+    """The pipeline module's namespace, its pipeline with the ``--set`` overrides applied (validated before any
+    work), and the run settings (which module was used, each override), printed here and recorded in the report."""
+    loaded = load_pipeline_module(args.pipeline)
+    pipe = _pipeline_from(loaded.namespace, args.pipeline, args.quick)
+    overrides = apply_overrides(pipe, args.set or ())
+    settings = [f"pipeline {args.pipeline!r}: {loaded.origin}"] + [o.describe() for o in overrides]
+    for line in settings:
+        print(line)
+    return loaded.namespace, pipe, settings
+
+
+def _report_fingerprint(namespace: dict[str, Any], result, settings: list[str]) -> str:
+    """What a report depends on: every node's key, the run settings and the pipeline modules' sources (the file, its
+    siblings and the built-in pipelines, which other pipelines include)."""
     module_file = namespace.get("__file__")
-    if module_file:
-        for path in sorted(Path(module_file).resolve().parent.glob("*.py")):
-            sources[path.name] = path.read_text()
-    return canonical_hash({"keys": dict(result.keys), "sources": sources})
+    directories = {builtin_pipeline_dir(), *([Path(module_file).resolve().parent] if module_file else [])}
+    sources = {str(path): path.read_text() for directory in directories for path in sorted(directory.glob("*.py"))}
+    return canonical_hash({"keys": dict(result.keys), "settings": settings, "sources": sources})
 
 
 def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argparse.Namespace,
-                  reuse: bool = False) -> None:
-    """Call the module's ``report`` (if any), print its lines and write ``report.html`` next to its figures.
+                  settings: list[str], reuse: bool = False) -> None:
+    """Call the module's ``report`` (if any), print its lines and write ``report.html`` next to its figures, after a
+    "Run settings" section (which pipeline module was used, the ``--set`` overrides).
 
-    With ``reuse`` (``spflow run`` when nothing executed), a report written for the same node keys and pipeline
-    sources is kept and its lines reprinted instead of redrawing every figure."""
+    With ``reuse`` (``spflow run`` when nothing executed), a report written for the same node keys, settings and
+    pipeline sources is kept and its lines reprinted instead of redrawing every figure."""
     report = namespace.get("report")
     outdir = Path(args.out or Path("out") / pipe.name)
     outdir.mkdir(parents=True, exist_ok=True)
-    fingerprint = _report_fingerprint(namespace, result)
+    fingerprint = _report_fingerprint(namespace, result, settings)
     stamp, saved, html = outdir / ".report_key", outdir / ".report_lines.json", outdir / "report.html"
     if reuse and html.is_file() and saved.is_file() and stamp.is_file() and stamp.read_text() == fingerprint:
         for line in _flat(json.loads(saved.read_text())):
@@ -93,7 +94,8 @@ def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argpa
         lines = report(result, outdir)
         for line in _flat(lines):
             print(line)
-    write_html_report(html, f"spflow report: {pipe.name}", sections_from(outdir, lines), provenance_rows(result))
+    write_html_report(html, f"spflow report: {pipe.name}", [Section("Run settings", settings),
+                                                             *sections_from(outdir, lines)], provenance_rows(result))
     saved.write_text(json.dumps(lines))
     stamp.write_text(fingerprint)
     print(f"report: {html.resolve()}")
@@ -107,32 +109,30 @@ def _flat(lines) -> list[str]:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    namespace = load_pipeline_module(args.pipeline)
-    pipe = _pipeline_from(namespace, args.pipeline, args.quick)
+    namespace, pipe, settings = _load(args)
     result = run(pipe, cache=args.cache, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                  until=args.until, only=args.only, force=args.force or (), verbose=True)
     print(f"{pipe.name}: {len(result.executed)} node(s) executed, {len(result.cached)} from cache")
     if not (args.until or args.only):
-        _write_report(namespace, pipe, result, args, reuse=not result.executed)
+        _write_report(namespace, pipe, result, args, settings, reuse=not result.executed)
     return 0
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    namespace = load_pipeline_module(args.pipeline)
-    pipe = _pipeline_from(namespace, args.pipeline, args.quick)
+    namespace, pipe, settings = _load(args)
     stale = [r.node for r in status(pipe, cache=args.cache) if not r.fresh]
     if stale:
+        again = ["spflow", "run", args.pipeline, *(["--quick"] if args.quick else []),
+                 *[word for text in args.set or () for word in ("--set", text)]]
         raise SpflowError(f"{len(stale)} node(s) of {pipe.name!r} are not in the cache ({', '.join(stale[:5])}"
-                          f"{', ...' if len(stale) > 5 else ''}); run `spflow run {args.pipeline}"
-                          f"{' --quick' if args.quick else ''}` first")
+                          f"{', ...' if len(stale) > 5 else ''}); run `{shlex.join(again)}` first")
     result = run(pipe, cache=args.cache)
-    _write_report(namespace, pipe, result, args)
+    _write_report(namespace, pipe, result, args, settings)
     return 0
 
 
 def _cmd_status(args: argparse.Namespace) -> int:
-    namespace = load_pipeline_module(args.pipeline)
-    pipe = _pipeline_from(namespace, args.pipeline, args.quick)
+    _, pipe, _ = _load(args)
     rows = status(pipe, cache=args.cache)
     width = max(len(r.node) for r in rows)
     for r in rows:
@@ -145,6 +145,10 @@ def _cmd_status(args: argparse.Namespace) -> int:
 def _cmd_list(args: argparse.Namespace) -> int:
     registry = get_registry()
     what = args.what
+    if what in ("pipelines", "all"):
+        print("pipelines:")
+        for info in available_pipelines():
+            print(f"  {info.name} ({info.origin}): {info.description}")
     if what in ("stages", "all"):
         print("stages:")
         for name in sorted(registry.stages):
@@ -201,9 +205,11 @@ def build_parser() -> argparse.ArgumentParser:
     p_report.add_argument("--out", metavar="DIR", help="where the report goes (default out/<pipeline>)")
     for p in (p_run, p_status, p_report):
         p.add_argument("--quick", action="store_true", help="the pipeline's quick profile (small budgets)")
+        p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE",
+                       help="override a node's parameter (VALUE parsed as JSON, else a string); repeatable")
 
-    p_list = sub.add_parser("list", help="list registered stages, effects and forward-model parameters")
-    p_list.add_argument("what", nargs="?", choices=["stages", "effects", "params", "all"], default="all")
+    p_list = sub.add_parser("list", help="list pipelines, registered stages, effects and forward-model parameters")
+    p_list.add_argument("what", nargs="?", choices=["pipelines", "stages", "effects", "params", "all"], default="all")
 
     p_clean = sub.add_parser("clean", help="delete the cache")
     p_clean.add_argument("--tmp", action="store_true", help="only delete unfinished temporary entries")
@@ -211,13 +217,14 @@ def build_parser() -> argparse.ArgumentParser:
     for p in (p_run, p_status, p_report, p_clean):
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
     add_diagnose_parser(sub)
+    add_export_parser(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
-               "diagnose": diagnose_command}[args.command]
+               "diagnose": diagnose_command, "export": export_command, "compare": export_command}[args.command]
     try:
         return handler(args)
     except SpflowError as exc:

@@ -43,10 +43,12 @@ _NAN_ALLOWED = ("c_polymer_out", "c_surfactant_out", "salinity_out")
 
 
 def schedule_json(schedule) -> str:
-    """JSON text ``{"name", "slugs": [...]}`` of a schedule (anything :func:`as_schedule` accepts)."""
+    """JSON text ``{"name", "slugs": [...]}`` of a schedule (anything :func:`as_schedule` accepts); a slug's
+    ``rate_ml_min`` (ml/min) is written only when the slug sets its own rate (unset: the run's QINJ)."""
     sched = as_schedule(schedule)
     slugs = [{"name": s.name, "pv": s.pv, "salinity_ppm": s.salinity_ppm, "surfactant_ppm": s.surfactant_ppm,
-              "polymer_ppm": s.polymer_ppm} for s in sched.slugs]
+              "polymer_ppm": s.polymer_ppm} | ({} if s.rate_ml_min is None else {"rate_ml_min": s.rate_ml_min})
+             for s in sched.slugs]
     return json.dumps({"name": sched.name, "slugs": slugs})
 
 

@@ -9,6 +9,7 @@ Format::
     salinity_ppm = 9400          # TDS, ppm
     surfactant_ppm = 0           # optional, ppm
     polymer_ppm = 0              # optional, ppm
+    rate_ml_min = 0.5            # optional, ml/min (default: the run's QINJ); PV stays the time axis
 
 Every error is a ``ValueError`` naming the file (and the slug and field, from the schedule's own validation).
 """

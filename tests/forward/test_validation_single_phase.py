@@ -92,19 +92,32 @@ def resistance_factors() -> tuple[float, float]:
     return mu_p * r_k / VIS1_CP, r_k
 
 
+def interval_averages(pv, exact, nodes: int = 16):
+    """Averages of ``exact(t)`` over the output intervals ``(pv[k-1], pv[k]]`` (Gauss-Legendre), as the effluent
+    series are interval averages."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    lo, hi = pv[:-1, None], pv[1:, None]
+    t = 0.5 * (hi - lo) * x + 0.5 * (hi + lo)
+    return (exact(t) * w).sum(axis=1) / 2.0
+
+
 def test_salinity_tracer_matches_ogata_banks():
     times = np.array([0.8, 0.9, 1.0, 1.1, 1.2, 1.3])
-    exact = ogata_banks(1.0, times, PECLET)
     errors = []
-    for cells in (100, 400):
+    for cells in (50, 400):
         ds = tracer_run(cells)
+        pv = ds["pv"].values
         salinity = ds["salinity_out"].values
         assert salinity[0] == pytest.approx(INITIAL_PPM, rel=1e-6)
-        at_times = np.interp(times, interval_midpoints(ds["pv"].values), salinity)
+        at_times = np.interp(times, interval_midpoints(pv), salinity)
         relative = (at_times - INITIAL_PPM) / (INJECTED_PPM - INITIAL_PPM)
+        averaged = interval_averages(pv, lambda t: ogata_banks(1.0, t, PECLET))
+        exact = np.interp(times, interval_midpoints(pv), np.concatenate([[0.0], averaged]))
         errors.append(float(np.max(np.abs(relative - exact))))
     # numerical dispersion adds to the physical one: the gap must shrink with the grid and be small at 400 cells
-    assert errors[1] < errors[0], f"max |C/C0 - Ogata-Banks| at 100/400 cells: {errors}"
+    # (from ~200 cells on it sits at a ~1e-3 floor: Ogata-Banks fixes the inlet concentration, the simulator has
+    # Danckwerts conditions, and its dispersion is backward Euler in time)
+    assert errors[1] < 0.25 * errors[0], f"max |C/C0 - Ogata-Banks| at 50/400 cells: {errors}"
     assert errors[1] < 0.015, f"max |C/C0 - Ogata-Banks| at 400 cells: {errors[1]:.4f}"
 
 

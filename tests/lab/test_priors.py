@@ -5,8 +5,6 @@ model's bounds); the output must satisfy the SPACE contract and drive ``lhs_desi
 name and range; the pipeline runs every lab fit, the priors and the chapter-3 history-matching DAG at a tiny budget.
 """
 
-import runpy
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +13,7 @@ import xarray as xr
 import spflow
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext
+from spflow.pipelines import lab_priors
 from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.design.thesis_tables import TABLE_3_2
@@ -25,7 +24,6 @@ from spflow.plugins.lab.priors import Priors
 
 BOUNDS = {p.name: (p.lower, p.upper) for p in PARAMETERS}
 CTX = StageContext("priors", verbose=False)
-PIPELINES = Path(__file__).resolve().parents[2] / "pipelines"
 
 
 @pytest.fixture(scope="module")
@@ -131,13 +129,12 @@ def test_bad_requests_name_the_problem(fits):
 
 def test_lab_priors_pipeline_feeds_history_matching(tmp_path):
     """All lab fits -> priors -> the chapter-3 DAG (its own ``space`` node replaced), tiny budget."""
-    module = runpy.run_path(str(PIPELINES / "lab_priors.py"))
-    pipe = module["pipeline"](front_end="history_matching", samples=10, cells=12, generations=2, population=8)
+    pipe = lab_priors.pipeline(front_end="history_matching", samples=10, cells=12, generations=2, population=8)
     assert pipe.nodes["history_matching.calibration"].params["generations"] == 2
     assert pipe.nodes["history_matching.design"].inputs == {"space": "space"}
     assert pipe.nodes["history_matching.calibration"].inputs["space"] == "space"
     result = spflow.run(pipe, cache=tmp_path / "cache", jobs=1, verbose=False)
-    lines = module["report"](result, tmp_path)
+    lines = lab_priors.report(result, tmp_path)
     space = result["space"]
     assert list(space["param"].values) == list(TABLE_3_2)
     for name in ("HBNC70", "HBNC71", "ALPHAV2", "AD31", "CRK", "ALPHAL1"):

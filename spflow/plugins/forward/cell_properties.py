@@ -8,8 +8,9 @@ properties the transport step needs, calling the property kernels of ``physics/`
    (running maximum) and optionally first-order kinetic -- ``adsorbed_amount``;
 3. Hand's-rule flash of the overall fluid composition (water, oil, accessible surfactant), normalised to 1;
 4. polymer in its carrier phase (the phase holding most of the water: aqueous, or the water-rich microemulsion of a
-   type II(-) system) with storage ``EPHI4 S_c C4`` (scaled IPV) plus adsorption, and the irreversible permeability
-   reduction (Eqs. 2.7-2.8, running maximum of R_k);
+   type II(-) system) with storage ``EPHI4 S_c C4`` (scaled IPV) plus adsorption (irreversible, or with a reversible
+   fraction -- ``partly_reversible_adsorbed``), and the irreversible permeability reduction (Eqs. 2.7-2.8, running
+   maximum of R_k);
 5. polymer-solution viscosity (Eqs. 2.1-2.2) with Meter shear thinning (Eq. 2.4) at the in-situ shear rate of the
    previous step, GAMHF fixed or Eq. 2.5; phase viscosities by Eq. 2.11 (the polymer solution replaces water in the
    carrier phase);
@@ -69,6 +70,34 @@ def adsorbed_amount(total, old, e, a, b, rate, dt_s):
     if rate > 0.0:
         return old + (eq - old) * (-math.expm1(-rate * dt_s))
     return eq
+
+
+@njit(cache=True, error_model="numpy")
+def partly_reversible_adsorbed(total, old, old_irr, e, a, b, frac, rate, dt_s):
+    """Adsorbed amount and its irreversible part per pore volume after a step, when a fraction ``frac`` in (0, 1] of
+    the Langmuir adsorption (Eqs. 2.15-2.16) is reversible (UTCHEM's adsorption is irreversible in concentration,
+    ``frac = 0``: ``adsorbed_amount``; ECLIPSE's PLYROCK adsorption index 1 is ``frac = 1``).
+
+    With the isotherm ``C^(c) = a c / (1 + b c)`` the reversible part is ``frac C^(c)`` at the current fluid
+    concentration ``c`` and the irreversible part ``I`` the running maximum of ``(1 - frac) C^(c)``; the total
+    ``total = e c + I + frac C^(c)`` is conserved. While the concentration rises above its history (``(1 - frac)
+    C^ >= I`` at the full-isotherm equilibrium) the split is that of ``adsorbed_amount``; otherwise ``I`` is held
+    and ``c`` solves the Langmuir balance of ``total - I`` with capacity ``frac a``. With ``rate > 0`` (1/s) both the
+    adsorbed amount and its irreversible part relax toward these values as ``1 - exp(-rate dt)``, so adsorbed
+    polymer also desorbs kinetically. Returns ``(adsorbed, irreversible part)``.
+    """
+    if total <= 0.0 or a <= 0.0 or e <= 0.0:
+        return old, old_irr
+    eq = e * langmuir_adsorbed(total / e, a / e, b)
+    if (1.0 - frac) * eq >= old_irr:
+        irr = (1.0 - frac) * eq
+    else:
+        irr = old_irr
+        eq = irr + e * langmuir_adsorbed(max(total - irr, 0.0) / e, frac * a / e, b)
+    if rate > 0.0:
+        relax = -math.expm1(-rate * dt_s)
+        return old + (eq - old) * relax, old_irr + (irr - old_irr) * relax
+    return eq, irr
 
 
 @njit(cache=True, error_model="numpy")
@@ -154,7 +183,11 @@ def _phase_equilibrium(st, pr, prm, n, dt_s):
         if s_c > 0.0 and t4 > 0.0:
             e4 = prm[K.EPHI4] * s_c
             a4 = langmuir_a(prm[K.AD41], prm[K.AD42], csep, 0.0, 1.0)
-            st[L.A4, i] = adsorbed_amount(t4, st[L.A4, i], e4, a4, prm[K.B4D], prm[K.KADS], dt_s)
+            if prm[K.REV4] > 0.0:
+                st[L.A4, i], st[L.A4I, i] = partly_reversible_adsorbed(t4, st[L.A4, i], st[L.A4I, i], e4, a4,
+                                                                       prm[K.B4D], prm[K.REV4], prm[K.KADS], dt_s)
+            else:
+                st[L.A4, i] = adsorbed_amount(t4, st[L.A4, i], e4, a4, prm[K.B4D], prm[K.KADS], dt_s)
             cp = max(t4 - st[L.A4, i], 0.0) / e4
             if prm[K.S_RK] > 0.0 and cp > st[L.CPMAX, i]:
                 st[L.CPMAX, i] = cp

@@ -8,22 +8,25 @@ applied by the forward model itself (as parameter scalings or kernel strength sc
 
 Built-ins (meaning of the strength ``s``):
 
-===========================  ==========  ===================================================================
-name                         default     strength
-===========================  ==========  ===================================================================
-inaccessible_pore_volume     1           IPV fraction scale: EPHI = 1 - s (1 - EPHI) for EPHI3 and EPHI4
-polymer_adsorption           1           Langmuir capacity scale: AD41, AD42 -> s AD41, s AD42 (Eq. 2.16)
-surfactant_adsorption        1           Langmuir capacity scale: AD31, AD32 -> s AD31, s AD32 (Eq. 2.16)
-permeability_reduction       1           R_k -> 1 + s (R_k - 1) (Eq. 2.7)
-shear_thinning               1           mu_p -> mu_p0 - s (mu_p0 - mu_Meter) (Eq. 2.4), s in [0, 1]
-polymer_salinity             1           salinity exponent scale: C_SEP^(s SSLOPE) in Eqs. 2.1-2.2 and 2.8
-dispersion                   1           dispersivity and diffusion scale: ALPHALl, DMOL -> s ALPHALl, s DMOL
-capillary_pressure           0           entry-pressure scale: CPC0 -> s CPC0 (Eq. 1.8)
-kinetic_adsorption           0           non-equilibrium degree: rate KADS / s toward the Langmuir value;
-                                         s = 0 is instantaneous (equilibrium) adsorption
-capillary_desaturation       1           trapping-parameter scale: T11, T22, T33 -> s T (Eq. 2.12); s = 0
-                                         keeps the low-Nc residuals, end points and exponents
-===========================  ==========  ===================================================================
+============================= ========= =================================================================
+name                          default   strength
+============================= ========= =================================================================
+inaccessible_pore_volume      1         IPV fraction scale: EPHI = 1 - s (1 - EPHI) for EPHI3 and EPHI4
+polymer_adsorption            1         Langmuir capacity scale: AD41, AD42 -> s AD41, s AD42 (Eq. 2.16)
+surfactant_adsorption         1         Langmuir capacity scale: AD31, AD32 -> s AD31, s AD32 (Eq. 2.16)
+permeability_reduction        1         R_k -> 1 + s (R_k - 1) (Eq. 2.7)
+shear_thinning                1         mu_p -> mu_p0 - s (mu_p0 - mu_Meter) (Eq. 2.4), s in [0, 1]
+polymer_salinity              1         salinity exponent scale: C_SEP^(s SSLOPE) in Eqs. 2.1-2.2 and 2.8
+dispersion                    1         dispersivity and diffusion scale: ALPHALl, DMOL -> s ALPHALl, s DMOL
+capillary_pressure            0         entry-pressure scale: CPC0 -> s CPC0 (Eq. 1.8)
+kinetic_adsorption            0         non-equilibrium degree: rate KADS / s toward the Langmuir value;
+                                        s = 0 is instantaneous (equilibrium) adsorption
+capillary_desaturation        1         trapping-parameter scale: T11, T22, T33 -> s T (Eq. 2.12); s = 0
+                                        keeps the low-Nc residuals, end points and exponents
+reversible_polymer_adsorption 0         irreversible -> reversible blend of the polymer adsorption: reversible
+                                        fraction f = ADSREV4 + s (1 - ADSREV4); s = 0 keeps ADSREV4 (default
+                                        0: irreversible in concentration, UTCHEM), s = 1 is fully reversible
+============================= ========= =================================================================
 """
 
 from __future__ import annotations
@@ -78,6 +81,8 @@ BUILTIN_EFFECTS: tuple[Effect, ...] = (
     Effect("kinetic_adsorption", "first-order (non-equilibrium) adsorption toward the Langmuir value",
            0.0, 0.0, 1.0e3),
     Effect("capillary_desaturation", "trapping-number dependence of residuals and rel-perms", 1.0, 0.0, 10.0),
+    Effect("reversible_polymer_adsorption", "desorption of adsorbed polymer as the concentration falls "
+           "(irreversible -> reversible Langmuir adsorption)", 0.0, 0.0, 1.0),
 )
 
 BUILTIN_NAMES = frozenset(e.name for e in BUILTIN_EFFECTS)

@@ -4,14 +4,17 @@ Per step (all in pore-volume units, see ``transport``):
 
 1. local physics of every cell from the conserved state (``cell_properties``: adsorption, flash, viscosities, IFT,
    trapping, mobilities);
-2. records: effluent averages over the elapsed output interval, pressure drop and profiles, when the time has landed
-   on an output or profile time;
+2. records: the series at every output time passed by the last step, by dense output (``output_records``: exact
+   effluent averages from cumulative amounts, pressure drop interpolated), and profiles at the profile times, which
+   the step lands on;
 3. pressure: incompressible flow at a constant injection rate with the producer at constant pressure makes the
    total Darcy velocity uniform, so the implicit pressure equation reduces to the integral of ``u / (k lambda_T)``
    over the cells (plus the capillary term when Pc is on) -- ``transport.pressure_profile``;
 4. time step: ``dt = cfl / (max_i speed_i / dx + 2 max_i D_cap,i / dx^2)`` (advective CFL from the local wave-speed
-   bound and, with Pc, the explicit capillary-diffusion limit), shortened to land exactly on slug ends and output
-   times;
+   bound and, with Pc, the explicit capillary-diffusion limit), capped by a ramp from every slug start (``ramp_step``:
+   the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
+   shortened to land exactly on slug ends and profile times. Output times never shorten a step, so the series do
+   not depend on the output grid;
 5. explicit conservative update of the six components with the TVD (or upwind) fluxes; a step that would make a
    saturation or concentration negative beyond round-off is retried with half the step, and fails as a time-step
    collapse after 60 halvings;
@@ -29,13 +32,11 @@ import numpy as np
 from numba import njit
 
 from . import kernel_inputs as K
+from . import output_records as R
 from . import state_layout as L
 from . import transport as T
 from .cell_properties import cell_properties
 
-# series rows
-DP, OIL_CUT, RECOVERY, CP_OUT, CS_OUT, SAL_OUT = range(6)
-N_SERIES = 6
 # profile rows
 P_SW, P_SO, P_SME, P_CP, P_CS, P_SAL, P_PRES, P_ADS3, P_ADS4, P_OIL, P_IFT = range(11)
 N_PROFILE = 11
@@ -46,6 +47,10 @@ N_DISP = 4
 
 NEG_TOL = 1.0e-10
 MAX_HALVINGS = 60
+# step ramp from every slug start: the first step is the CFL step of a wave of speed RAMP_SPEED (PV units, above any
+# fractional-flow slope of the model's relative permeabilities), each later one at most RAMP_GROWTH times the last
+RAMP_SPEED = 16.0
+RAMP_GROWTH = 1.25
 
 
 @njit(cache=True, error_model="numpy")
@@ -155,13 +160,24 @@ def apply_dispersion(st, n, lamd, jd):
 
 
 @njit(cache=True, error_model="numpy")
-def landing_step(dt, t, slug_end, out_pv, k_out, prof_pv, k_prof):
-    """The stable step ``dt`` from time ``t`` shortened to land exactly on the next stop (the slug end, the next
-    output or profile time), and halved when a full step would leave less than half a step before it; returns
+def ramp_step(dt_stable, ramp, dx, cfl):
+    """The stable step capped by the ramp: ``ramp`` is the cap of the previous step (0 at a slug start, where the
+    cap is the CFL step of a wave of speed ``RAMP_SPEED``); returns ``(dt, cap)`` with the cap for the next call.
+
+    At a slug start the cells hold the states left by the previous fluid (at t = 0 the connate water, where
+    df/dS = 0), so the wave speeds computed from them miss the wave the injected fluid is about to make (the
+    Buckley-Leverett shock has speed f(S*)/(S* - S_wc) > 0); a step sized from them alone would push a piston-like
+    first front into the core. The ramp lets the cells develop the states of the new wave first."""
+    cap = cfl * dx / RAMP_SPEED if ramp <= 0.0 else ramp * RAMP_GROWTH
+    return min(dt_stable, cap), cap
+
+
+@njit(cache=True, error_model="numpy")
+def landing_step(dt, t, slug_end, prof_pv, k_prof):
+    """The stable step ``dt`` from time ``t`` shortened to land exactly on the next stop (the slug end or the next
+    profile time), and halved when a full step would leave less than half a step before it; returns
     ``(dt, landed, stop)``: the time is set to ``stop`` exactly after a landed step (no round-off drift)."""
     next_stop = slug_end
-    if k_out < out_pv.shape[0] and out_pv[k_out] < next_stop:
-        next_stop = out_pv[k_out]
     if k_prof < prof_pv.shape[0] and prof_pv[k_prof] < next_stop:
         next_stop = prof_pv[k_prof]
     remaining = next_stop - t
@@ -173,10 +189,18 @@ def landing_step(dt, t, slug_end, out_pv, k_out, prof_pv, k_prof):
 
 
 @njit(cache=True, error_model="numpy")
-def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
+def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
+    ``flow[2, slugs]`` = Darcy velocity (m/s) and time per PV (s) of each slug (``kernel_inputs.slug_flow``);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
-    profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number."""
+    profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number.
+
+    Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
+    so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
+    adsorption step see it; records at a slug end hold the ending slug's values (the left limit)."""
+    prm = prm.copy()
+    prm[K.UT] = flow[K.FLOW_UT, 0]
+    prm[K.T_PV] = flow[K.FLOW_T_PV, 0]
     n_out = out_pv.shape[0]
     n_prof = prof_pv.shape[0]
     n_slug = end_pv.shape[0]
@@ -195,11 +219,14 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
     d_conc = np.zeros((N_DISP, n))
     d_coef = np.zeros((N_DISP, n))
     press = np.zeros(n)
-    series = np.zeros((N_SERIES, n_out))
+    series = np.zeros((R.N_SERIES, n_out))
     prof = np.zeros((N_PROFILE, n_prof, n))
     totals = np.zeros((4, 6))
     info = np.zeros(N_INFO)
-    acc = np.zeros(6)
+    cum = np.zeros(R.N_CUM)  # cumulative produced amounts (output_records), at t, t_prev and the last output
+    cum_prev = np.zeros(R.N_CUM)
+    cum_last = np.zeros(R.N_CUM)
+    delta = np.zeros(R.N_CUM)
 
     swi = prm[K.SWI]
     for i in range(n):
@@ -216,41 +243,36 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
     k_over_ul = prm[K.PERM_M2] / (prm[K.UT] * prm[K.LENGTH])
 
     t = 0.0
+    t_prev = 0.0
     t_last = 0.0
+    dp_prev = 0.0
     k_out = 0
     k_prof = 0
     slug = 0
+    ramp = 0.0
     steps = 0
     dt_s = 0.0
-    acc_c = 0.0
-    cum_oil = 0.0
     # the first pass sets the lagged trapping and shear inputs (k|grad p|, carrier flux) of the initial state
     status = _properties(st, pr, prm, n, 0.0, info, t)
     while status == L.OK:
         status = _properties(st, pr, prm, n, dt_s, info, t)
         if status != L.OK:
             break
-        # ---- records at the landed time
-        while k_out < n_out and t >= out_pv[k_out]:
-            series[DP, k_out] = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
-            series[RECOVERY, k_out] = cum_oil / ooip if ooip > 0.0 else 0.0
-            span = t - t_last
-            if k_out == 0 or span <= 0.0:
+        # ---- records: the series at t = 0 from the initial state, later every output time the last step passed
+        dp_now = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
+        if steps == 0:
+            while k_out < n_out and out_pv[k_out] <= 0.0:
                 T.advective_fluxes(pr, n, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, flux)
-                series[OIL_CUT, k_out] = flux[T.FO, n]
-                series[CS_OUT, k_out] = flux[T.FS, n]
-                series[CP_OUT, k_out] = pr[L.CP, n - 1] if pr[L.PCX, n - 1] > 0.0 else 0.0
-                series[SAL_OUT, k_out] = pr[L.C5, n - 1]
-            else:
-                series[OIL_CUT, k_out] = acc[T.FO] / span
-                series[CS_OUT, k_out] = acc[T.FS] / span
-                series[CP_OUT, k_out] = acc[T.FP] / acc_c if acc_c > 0.0 else 0.0
-                series[SAL_OUT, k_out] = acc[T.FA] / acc[T.FW] if acc[T.FW] > 0.0 else pr[L.C5, n - 1]
-            for r in range(6):
-                acc[r] = 0.0
-            acc_c = 0.0
-            t_last = t
-            k_out += 1
+                series[R.DP, k_out] = dp_now
+                series[R.RECOVERY, k_out] = 0.0
+                series[R.OIL_CUT, k_out] = flux[T.FO, n]
+                series[R.CS_OUT, k_out] = flux[T.FS, n]
+                series[R.CP_OUT, k_out] = pr[L.CP, n - 1] if pr[L.PCX, n - 1] > 0.0 else 0.0
+                series[R.SAL_OUT, k_out] = pr[L.C5, n - 1]
+                k_out += 1
+        else:
+            k_out, t_last = R.record_outputs(series, out_pv, k_out, t_prev, t, dp_prev, dp_now, cum_prev, cum,
+                                             cum_last, t_last, ooip, pr[L.C5, n - 1], delta)
         while k_prof < n_prof and t >= prof_pv[k_prof]:
             _record_profile(st, pr, prm, n, prof, k_prof, press)
             k_prof += 1
@@ -260,6 +282,17 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
         # ---- time step
         while slug < n_slug - 1 and t >= end_pv[slug]:
             slug += 1
+            ramp = 0.0
+        if flow[K.FLOW_UT, slug] != prm[K.UT]:
+            # a rate step: the new slug's velocity, and the local physics again at it (dt_s = 0: no kinetic
+            # adsorption time passes); the outputs inside the next step start from the new rate's dp
+            prm[K.UT] = flow[K.FLOW_UT, slug]
+            prm[K.T_PV] = flow[K.FLOW_T_PV, slug]
+            k_over_ul = prm[K.PERM_M2] / (prm[K.UT] * prm[K.LENGTH])
+            status = _properties(st, pr, prm, n, 0.0, info, t)
+            if status != L.OK:
+                break
+            dp_now = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
         smax = 0.0
         dmax = 0.0
         for i in range(n):
@@ -268,8 +301,12 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
             if pr[L.DCAP, i] > dmax:
                 dmax = pr[L.DCAP, i]
         rate = smax / dx + 2.0 * dmax / (dx * dx)
-        dt, land, next_stop = landing_step(cfl / rate if rate > 0.0 else np.inf, t, end_pv[slug], out_pv, k_out,
-                                           prof_pv, k_prof)
+        dt, ramp = ramp_step(cfl / rate if rate > 0.0 else np.inf, ramp, dx, cfl)
+        dt, land, next_stop = landing_step(dt, t, end_pv[slug], prof_pv, k_prof)
+        t_prev = t
+        dp_prev = dp_now
+        for r in range(R.N_CUM):
+            cum_prev[r] = cum[r]
 
         # ---- fluxes and explicit update, halving the step until no component goes negative
         bad = -1
@@ -309,9 +346,8 @@ def run_kernel(prm, end_pv, inj, out_pv, prof_pv, n, tvd, cfl):
         for r in range(6):
             totals[1, r] += flux[r, 0] * dt
             totals[2, r] += flux[r, n] * dt
-            acc[r] += flux[r, n] * dt
-        acc_c += f_c * dt
-        cum_oil += flux[T.FO, n] * dt
+            cum[r] += flux[r, n] * dt
+        cum[R.CARRIER] += f_c * dt
         t = next_stop if land else t + dt
         dt_s = dt * prm[K.T_PV]
         steps += 1

@@ -4,7 +4,7 @@ The kernel cannot take dicts, so the resolved parameters (``parameters.resolve_p
 (``effects.EffectRegistry.resolve``) are packed here into one array, converted to kernel units (SI for lengths,
 permeability, velocity and time; cP for viscosity, mN/m for IFT; UTCHEM units for concentrations). Built-in effects
 are applied here as parameter scalings (adsorption capacity, IPV, dispersivity, trapping parameters, Pc entry
-pressure, salinity exponent, kinetic rate) or passed as strength scalars (shear thinning, permeability reduction).
+pressure, salinity exponent, kinetic rate, reversible adsorption fraction) or passed as strength scalars (shear thinning, permeability reduction).
 The index constants are module-level integers, which numba freezes as compile-time constants.
 """
 
@@ -34,20 +34,39 @@ AD31, AD32, B3D, AD41, AD42, B4D, KADS = range(69, 76)
 # --- dispersion (PV units: alpha_l / L) and diffusion, capillary pressure ---
 ALPHA_D = 76  # 76, 77, 78
 DMOL, PC0, EPC0 = 79, 80, 81
-N_KERNEL_PARAMS = 82
+# --- reversible fraction of the polymer adsorption (0: irreversible in concentration) ---
+REV4 = 82
+N_KERNEL_PARAMS = 83
+# rows of the per-slug flow array (``slug_flow``)
+FLOW_UT, FLOW_T_PV = 0, 1
+
+
+def _darcy_velocity_and_pv_time(p: dict[str, float], rate_ml_min: float) -> tuple[float, float]:
+    """Darcy velocity (m/s) and time per injected pore volume (s) of the core ``p`` at ``rate_ml_min``."""
+    area = math.pi * p["DIAMETER"] ** 2 / 4.0
+    q = rate_ml_min * units.ML_MIN_TO_M3_S
+    return q / area, p["PORO"] * area * p["LENGTH"] / q
+
+
+def slug_flow(p: dict[str, float], rates_ml_min: np.ndarray) -> np.ndarray:
+    """Per-slug flow of the kernel, ``[2, slugs]``: row ``UT`` the Darcy velocity (m/s) and row ``T_PV`` the time per
+    pore volume (s) at each slug's rate (``Schedule.rates_ml_min``); a slug at QINJ gets exactly the ``UT`` and
+    ``T_PV`` of ``build_kernel_params``."""
+    flow = np.empty((2, len(rates_ml_min)))
+    for j, rate in enumerate(rates_ml_min):
+        flow[FLOW_UT, j], flow[FLOW_T_PV, j] = _darcy_velocity_and_pv_time(p, float(rate))
+    return flow
 
 
 def build_kernel_params(p: dict[str, float], s: dict[str, float]) -> np.ndarray:
-    """Pack resolved parameters ``p`` and built-in effect strengths ``s`` into the kernel vector."""
+    """Pack resolved parameters ``p`` and built-in effect strengths ``s`` into the kernel vector (``UT`` and
+    ``T_PV`` at QINJ; the kernel takes each slug's own from ``slug_flow``)."""
     k = np.zeros(N_KERNEL_PARAMS)
-    area = math.pi * p["DIAMETER"] ** 2 / 4.0
-    q = p["QINJ"] * units.ML_MIN_TO_M3_S
     k[PHI] = p["PORO"]
     k[PERM_M2] = p["PERM"] * units.MD_TO_M2
     k[PERM_D] = p["PERM"] * units.MD_TO_DARCY
-    k[UT] = q / area
+    k[UT], k[T_PV] = _darcy_velocity_and_pv_time(p, p["QINJ"])
     k[LENGTH] = p["LENGTH"]
-    k[T_PV] = p["PORO"] * area * p["LENGTH"] / q
     k[SWI], k[C50], k[C60] = p["SWI"], p["C50"], p["C60"]
     k[VIS1], k[VIS2] = p["VIS1"], p["VIS2"]
     k[SIGOW] = 10.0 ** p["XIFTW"]
@@ -86,6 +105,7 @@ def build_kernel_params(p: dict[str, float], s: dict[str, float]) -> np.ndarray:
     k[B4D] = p["B4D"]
     kin = s["kinetic_adsorption"]
     k[KADS] = p["KADS"] / kin if kin > 0.0 else 0.0  # 0 = equilibrium adsorption
+    k[REV4] = p["ADSREV4"] + s["reversible_polymer_adsorption"] * (1.0 - p["ADSREV4"])
 
     k[DMOL] = s["dispersion"] * p["DMOL"]
     k[PC0] = s["capillary_pressure"] * p["CPC0"]

@@ -6,6 +6,7 @@ import numpy as np
 import xarray as xr
 
 from . import kernel as KR
+from . import output_records as R
 from . import units
 
 __all__ = ["build_dataset", "COMPONENTS"]
@@ -17,14 +18,14 @@ _AVG = "average over the pv interval (previous grid point, pv]; at pv = 0 the in
 _POINT = "point value at pv"
 
 _SERIES = (
-    ("dp", KR.DP, "Pa", "pressure drop |P_inj - P_prod|", _POINT, 1.0),
-    ("oil_cut", KR.OIL_CUT, "1", "oil cut (oil volume fraction of the effluent)", _AVG, 1.0),
-    ("recovery", KR.RECOVERY, "1", "cumulative oil recovery, fraction of OOIP (0 if OOIP = 0)", _POINT, 1.0),
-    ("c_polymer_out", KR.CP_OUT, "ppm", "effluent polymer concentration in the polymer-carrying phase", _AVG,
+    ("dp", R.DP, "Pa", "pressure drop |P_inj - P_prod|", _POINT, 1.0),
+    ("oil_cut", R.OIL_CUT, "1", "oil cut (oil volume fraction of the effluent)", _AVG, 1.0),
+    ("recovery", R.RECOVERY, "1", "cumulative oil recovery, fraction of OOIP (0 if OOIP = 0)", _POINT, 1.0),
+    ("c_polymer_out", R.CP_OUT, "ppm", "effluent polymer concentration in the polymer-carrying phase", _AVG,
      units.wt_percent_to_polymer_ppm(1.0)),
-    ("c_surfactant_out", KR.CS_OUT, "ppm", "effluent surfactant concentration (overall, by volume)", _AVG,
+    ("c_surfactant_out", R.CS_OUT, "ppm", "effluent surfactant concentration (overall, by volume)", _AVG,
      units.volume_fraction_to_surfactant_ppm(1.0)),
-    ("salinity_out", KR.SAL_OUT, "ppm", "effluent salinity (TDS) of the produced water", _AVG,
+    ("salinity_out", R.SAL_OUT, "ppm", "effluent salinity (TDS) of the produced water", _AVG,
      units.anions_to_tds_ppm(1.0)),
 )
 

@@ -147,6 +147,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     _p("AD41", "-", 8.4, 0.0, 100.0, _ADS, "polymer Langmuir a41 (Table 2.4)"),
     _p("AD42", "ml/meq", 0.0, 0.0, 100.0, _ADS, "polymer Langmuir salinity slope a42 (Table 2.4)"),
     _p("B4D", "1/wt%", 100.0, 0.0, 1.0e5, _ADS, "polymer Langmuir b4 (Table 2.4)"),
+    _p("ADSREV4", "-", 0.0, 0.0, 1.0, _ADS, "reversible fraction of the polymer adsorption: 0 irreversible in "
+       "concentration (UTCHEM), 1 fully reversible (ECLIPSE PLYROCK adsorption index 1)"),
     _p("KADS", "1/s", 1.0e-3, 1.0e-7, 1.0, _ADS, "first-order rate of kinetic adsorption (effect kinetic_adsorption)"),
     # --- dispersion ---
     _p("ALPHAL1", "ft", 0.01, 0.0, 1.0, _DISP, "longitudinal dispersivity of the aqueous phase (Fig. 2.9)"),

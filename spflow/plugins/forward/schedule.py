@@ -1,7 +1,9 @@
 """Injection schedules: slugs of brine, surfactant and polymer (thesis Table 2.5).
 
-A :class:`Schedule` is a named sequence of :class:`Slug` s injected one after the other at the constant rate QINJ.
-Concentrations are user-facing lab units (ppm); :meth:`Schedule.kernel_arrays` converts them once, through
+A :class:`Schedule` is a named sequence of :class:`Slug` s injected one after the other, each at its own rate
+``rate_ml_min`` (ml/min; ``None``, the default, is the run's QINJ). Injected pore volumes stay the time axis of every
+output whatever the rates: a rate step changes the Darcy velocity (pressure drop, shear rate, trapping number,
+capillary diffusion, the time per PV seen by kinetic adsorption), not the PV at which a slug ends. Concentrations are user-facing lab units (ppm); :meth:`Schedule.kernel_arrays` converts them once, through
 :mod:`spflow.plugins.forward.units`, to the kernel's units (meq/ml, volume fraction, wt %).
 
 Validation happens before any work and names the slug (index and name) and the field at fault.
@@ -19,21 +21,26 @@ from spflow.core.errors import ParameterError
 
 from . import units
 from .checks import check_number
+from .parameters import PARAMETERS
 
 __all__ = ["Slug", "Schedule", "BCF_SCHEDULES", "as_schedule"]
 
 _MAX_PPM = 1.0e6
+#: allowed per-slug rates: the bounds of QINJ (ml/min)
+_RATE_BOUNDS = next((spec.lower, spec.upper) for spec in PARAMETERS if spec.name == "QINJ")
 
 
 @dataclass(frozen=True)
 class Slug:
-    """One injected slug: size in pore volumes and concentrations in ppm (TDS, surfactant, polymer)."""
+    """One injected slug: size in pore volumes, concentrations in ppm (TDS, surfactant, polymer) and the injection
+    rate in ml/min (``None``: the run's QINJ)."""
 
     name: str
     pv: float
     salinity_ppm: float
     surfactant_ppm: float = 0.0
     polymer_ppm: float = 0.0
+    rate_ml_min: float | None = None
 
     def validated(self, index: int) -> Slug:
         """A copy with float fields, or ``ParameterError`` naming slug ``index``/``name`` and the field."""
@@ -46,6 +53,8 @@ class Slug:
             salinity_ppm=check_number(f"{where}: field 'salinity_ppm'", self.salinity_ppm, 0.0, _MAX_PPM),
             surfactant_ppm=check_number(f"{where}: field 'surfactant_ppm'", self.surfactant_ppm, 0.0, _MAX_PPM),
             polymer_ppm=check_number(f"{where}: field 'polymer_ppm'", self.polymer_ppm, 0.0, _MAX_PPM),
+            rate_ml_min=None if self.rate_ml_min is None else check_number(
+                f"{where}: field 'rate_ml_min' (ml/min)", self.rate_ml_min, *_RATE_BOUNDS),
         )
 
 
@@ -83,6 +92,15 @@ class Schedule:
             "c6": np.array([units.tds_ppm_to_divalent(s.salinity_ppm) for s in self.slugs]),
         }
 
+    def rates_ml_min(self, qinj: float) -> np.ndarray:
+        """Per-slug injection rates (ml/min): each slug's ``rate_ml_min``, or ``qinj`` (the run's QINJ) where unset."""
+        return np.array([qinj if s.rate_ml_min is None else s.rate_ml_min for s in self.slugs], dtype=np.float64)
+
+    @property
+    def has_rates(self) -> bool:
+        """True when some slug sets its own ``rate_ml_min``."""
+        return any(s.rate_ml_min is not None for s in self.slugs)
+
 
 def _bcf(name, iwf, htds, sp_pv, sp_tds, poly_ppm, p_pv, ewf):
     slugs = [Slug("IWF", iwf, 9400.0)]
@@ -103,7 +121,7 @@ BCF_SCHEDULES: dict[str, Schedule] = {
     "BCF3": _bcf("BCF3", 1.60, 0.25, 0.25, 17500.0, 2500.0, 0.51, 1.49),
 }
 
-_SLUG_FIELDS = ("name", "pv", "salinity_ppm", "surfactant_ppm", "polymer_ppm")
+_SLUG_FIELDS = ("name", "pv", "salinity_ppm", "surfactant_ppm", "polymer_ppm", "rate_ml_min")
 
 
 def _slug_from_mapping(i: int, m: Mapping) -> Slug:
@@ -119,6 +137,7 @@ def _slug_from_mapping(i: int, m: Mapping) -> Slug:
         salinity_ppm=m["salinity_ppm"],
         surfactant_ppm=m.get("surfactant_ppm", 0.0),
         polymer_ppm=m.get("polymer_ppm", 0.0),
+        rate_ml_min=m.get("rate_ml_min"),
     )
 
 

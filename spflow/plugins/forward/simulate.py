@@ -18,7 +18,7 @@ from . import state_layout as L
 from .errors import SimulationError
 from .kernel import run_kernel
 from .checks import check_number
-from .kernel_inputs import build_kernel_params
+from .kernel_inputs import build_kernel_params, slug_flow
 from .outputs import build_dataset
 from .parameters import resolve_params
 from .schedule import as_schedule
@@ -53,15 +53,17 @@ def common_grid(totals, pv_step: float) -> tuple[np.ndarray, list[np.ndarray]]:
 
 
 def kernel_arguments(sched, resolved, strengths, pv_step):
-    """``(prm, end_pv, inj, out_pv)`` of ``run_kernel`` for a validated schedule, resolved parameters and effect
-    strengths: the parameter vector, the slug ends (the last one the end of the output grid), the injected
-    concentrations ``inj[4, slugs]`` and the output grid."""
+    """``(prm, end_pv, inj, flow, out_pv)`` of ``run_kernel`` for a validated schedule, resolved parameters and
+    effect strengths: the parameter vector, the slug ends (the last one the end of the output grid), the injected
+    concentrations ``inj[4, slugs]``, the per-slug Darcy velocity and time per PV ``flow[2, slugs]`` and the output
+    grid."""
     arrays = sched.kernel_arrays()
     inj = np.ascontiguousarray(np.vstack([arrays["c3"], arrays["c4"], arrays["c5"], arrays["c6"]]))
     out_pv = output_grid(sched.total_pv, pv_step)
     end_pv = arrays["end_pv"].copy()
     end_pv[-1] = out_pv[-1]
-    return build_kernel_params(resolved, strengths), end_pv, inj, out_pv
+    flow = slug_flow(resolved, sched.rates_ml_min(resolved["QINJ"]))
+    return build_kernel_params(resolved, strengths), end_pv, inj, flow, out_pv
 
 
 def _check_cells(cells):
@@ -108,7 +110,10 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ----------
     schedule:
         ``"BCF1"``, ``"BCF2"``, ``"BCF3"`` (thesis Table 2.5), a ``Schedule``, or a list of slug mappings
-        ``{"pv", "salinity_ppm", "surfactant_ppm", "polymer_ppm", "name"}``.
+        ``{"pv", "salinity_ppm", "surfactant_ppm", "polymer_ppm", "name", "rate_ml_min"}``. A slug's
+        ``rate_ml_min`` (default: QINJ) is its injection rate: the outputs stay on injected PV, and ``dp`` and the
+        rate-dependent physics (shear thinning, trapping number, capillary and molecular diffusion, kinetic
+        adsorption per PV) follow the rate of the slug being injected (at a slug end: the ending slug's). 1-D only.
     params:
         UTCHEM-named parameters overriding the defaults (``spflow list params``; ``parameters.PARAMETERS``).
     cells:
@@ -134,7 +139,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ``c_surfactant``, ``salinity``, ``pressure`` (plus ``surfactant_adsorbed``, ``polymer_adsorbed`` and
     ``oil_overall`` for balances, and ``ift``); attrs with the schedule, grid, scheme, every resolved parameter
     (``param_<NAME>``) and effect strength (``effect_<name>``), the per-component relative mass-balance error,
-    ``n_steps`` and ``wall_time_s``.
+    ``n_steps`` and ``wall_time_s`` (and ``slug_rate_ml_min``, the rate of every slug, when a slug sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
     ``D = C^(C_J) / C_J = a / (1 + b C_J)`` pore volumes with ``a = AD41 + AD42 C_SEP`` and ``b = B4D`` for polymer
@@ -155,10 +160,10 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     sched, resolved, strengths, registry, cells, pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
-    prm, end_pv, inj, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
+    prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     start = time.perf_counter()
     status, info, n_steps, series, profiles, totals = run_kernel(
-        prm, end_pv, inj, out_pv, prof, cells, _SCHEMES[scheme], cfl
+        prm, end_pv, inj, flow, out_pv, prof, cells, _SCHEMES[scheme], cfl
     )
     wall = time.perf_counter() - start
     if status != L.OK:
@@ -166,6 +171,8 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
 
     attrs = {"schedule": sched.name, "cells": cells, "scheme": scheme, "cfl": cfl, "pv_step": pv_step,
              "n_steps": int(n_steps), "wall_time_s": wall}
+    if sched.has_rates:
+        attrs["slug_rate_ml_min"] = [float(r) for r in sched.rates_ml_min(resolved["QINJ"])]
     attrs.update({f"param_{k}": v for k, v in resolved.items()})
     attrs.update({f"effect_{k}": v for k, v in strengths.items()})
     ds = build_dataset(series, profiles, totals, out_pv, prof, cells, attrs)

@@ -6,18 +6,21 @@ the cell):
 - ``M1, M2``: water and oil volume; ``M3``: surfactant volume, fluid plus adsorbed (``EPHI3 C3 + C^3``);
   ``M4``: polymer, fluid plus adsorbed (``EPHI4 S_c C4 + C^4``, wt % x PV); ``M5, M6``: anions and divalent cations
   carried by the water (meq/ml x water volume);
-- ``A3, A4``: adsorbed surfactant / polymer (running maxima: irreversible in concentration);
+- ``A3, A4``: adsorbed surfactant / polymer (running maxima: irreversible in concentration; polymer partly or
+  fully reversible with ``kernel_inputs.REV4 > 0``);
 - ``RK``: permeability-reduction factor, evaluated at ``CPMAX``, the running maximum of the polymer concentration
   in the cell (irreversible);
 - ``FPC``: fractional flow of the polymer-carrying phase at the previous step (lagged shear rate);
-- ``GRADK``: ``k |dp/dx| = u / lambda_T`` (Pa) at the previous step (lagged trapping number).
+- ``GRADK``: ``k |dp/dx| = u / lambda_T`` (Pa) at the previous step (lagged trapping number);
+- ``A4I``: the irreversible part of the adsorbed polymer (a running maximum) when a fraction of the polymer
+  adsorption is reversible (``kernel_inputs.REV4 > 0``; then ``A4`` is not a running maximum); unused otherwise.
 
 Properties ``pr[NPR, cells]`` -- recomputed from the state at the start of every step (see ``cell_properties``);
 the rows from ``C1P`` on also carry values between the three property passes (rel-perm inputs and results).
 """
 
-M1, M2, M3, M4, M5, M6, A3, A4, RK, CPMAX, FPC, GRADK = range(12)
-NST = 12
+M1, M2, M3, M4, M5, M6, A3, A4, RK, CPMAX, FPC, GRADK, A4I = range(13)
+NST = 13
 
 S1 = 0  # saturations S1, S2, S3 at S1 + l - 1
 F1 = 3  # fractional flows f1, f2, f3

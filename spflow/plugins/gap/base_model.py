@@ -47,7 +47,7 @@ DEFAULT_PV_STEP = 0.01
 _MAX_CELLS = 2000
 
 #: The thesis's reduced calibration space (Table 3.2) on the default model, cells = 60 (the default base of
-#: ``pipelines/gap_diagnosis.py``). ``n_high`` / ``n_low`` set the Corey exponents of all three phases.
+#: ``spflow/pipelines/gap_diagnosis.py``). ``n_high`` / ``n_low`` set the Corey exponents of all three phases.
 _PHASE_GROUPS = {"E2C": ("n_high", ["E1C", "E2C", "E3C"]), "E2WC": ("n_low", ["E1WC", "E2WC", "E3WC"])}
 TABLE_3_2_BASE = {
     "cells": 60,

@@ -7,7 +7,8 @@ A candidate is a catalogue effect (:mod:`spflow.plugins.forward.effects`) whose 
 * a **physical range**: strengths a lab would accept as that mechanism (the decision rule's "physical strength"
   test, gap notes §6.1); for the built-ins the ranges follow the parameter sources of ``docs/forward_model.md``
   (e.g. IPV up to the 15 % of Table 2.4, capillary entry pressures 0.5-20 kPa for Berea, adsorption rates from
-  equilibrium down to ~0.2 per PV-time);
+  equilibrium down to ~0.2 per PV-time, a reversible share of the polymer adsorption from 20 % -- a desorption a
+  post-flush can show -- to ECLIPSE's fully reversible option);
 * a **search range** for the refit, wider than the physical range so that a fit can say "weaker than physical";
 * **test strengths**: the finite strengths at which fingerprints are taken (gap notes §4.5: a derivative at
   ``s = 0`` is a poor guide to a finite front shift).
@@ -43,6 +44,7 @@ PHYSICAL_RANGES: dict[str, tuple[float, float, bool, tuple[float, ...]]] = {
     "capillary_pressure": (0.1, 4.0, True, (0.25, 1.0)),         # entry pressure 0.5-20 kPa
     "kinetic_adsorption": (1.0, 300.0, True, (3.0, 30.0)),       # rate KADS/s: 1e-3 .. 3e-6 1/s
     "capillary_desaturation": (0.1, 5.0, True, (0.5, 2.0)),      # trapping parameters x0.1-5
+    "reversible_polymer_adsorption": (0.2, 1.0, False, (0.5, 1.0)),  # reversible share of the polymer adsorption
 }
 
 

@@ -38,8 +38,8 @@ ALPHAL2, 3     ±20 %                     Fig. 2.9 0.01 ft ± 20 %
 =============  ========================  ==================================================================
 
 n_high and n_low are the Corey exponents (Eq. 2.14) at high and low trapping number (Eq. 2.13 interpolates
-between them). Table 3.1 gives one pair; we take the **oleic** phase's pair E2C (high) and E2WC (low), as
-``pipelines/prior_spread.py`` does: the oil exponent shapes k_ro at low oil saturation, i.e. the recovery tail the
+between them). Table 3.1 gives one pair; we take the **oleic** phase's pair E2C (high) and E2WC (low), as the
+``prior_spread`` pipeline does: the oil exponent shapes k_ro at low oil saturation, i.e. the recovery tail the
 QoIs measure, while the aqueous (E1C/E1WC) and microemulsion (E3C/E3WC) exponents stay at their defaults of 2.
 
 Caveat: the Table 3.2 ranges are the thesis's proxy ranges, several times wider than ±20 % for ALPHAV2, AD31,

@@ -5,18 +5,21 @@ Per step (time in PV, the units of ``grid2d``):
 1. local physics of every cell (``cell_properties`` on the flattened grid: the 1-D property passes, cell by cell);
 2. implicit pressure (``pressure2d``: sparse two-point system, LU-preconditioned CG or ``splu``) and the face
    velocities -- every step with ``pressure_every = 1`` (IMPES), else every ``pressure_every`` steps and at every
-   landed time (slug ends, output and profile times), the transport in between using the last velocity field
+   landed time (slug ends, profile times) and at the end of a step that passed an output time, the transport in
+   between using the last velocity field
    (divergence-free, so still conservative); the lagged inputs of the next step's properties are made local:
    ``k|grad p| = |U| u_ref / lambda_T`` (trapping number) and the carrier flux scaled by ``|U| / sqrt(k / k_ref)``
    (the in-situ shear rate ``gamma_c |u_c| / sqrt(k k_r phi S)``);
-3. records (series, maps) when the time has landed on an output or profile time;
-4. time step from ``transport2d.stable_step``, shortened to land on slug ends and output times, halved while any
+3. records: the series at every output time passed by the last step (dense output, ``output_records``), maps at
+   the profile times, which the step lands on;
+4. time step from ``transport2d.stable_step``, capped by the ramp from every slug start (``kernel.ramp_step``),
+   shortened to land on slug ends and profile times (never on output times), halved while any
    component would turn negative (``kernel.first_negative``; 60 halvings, then a time-step collapse);
 5. explicit conservative advection (``transport2d``: TVD along rows and columns), then the split backward-Euler
    dispersion (``dispersion2d``).
 
 Returns ``(status, info, n_steps, solver, series, maps, totals, pressure)`` with the 1-D kernel's conventions
-(series rows ``kernel.DP ...``, profile rows ``kernel.P_*`` on the flattened grid, ``totals[4, 6]``), the
+(series rows ``output_records.DP ...``, profile rows ``kernel.P_*`` on the flattened grid, ``totals[4, 6]``), the
 ``PressureSolver`` (its counters ``n_solves``, ``n_factorizations``, ``n_iterations``) and the final pressure
 field.
 """
@@ -27,6 +30,7 @@ import numpy as np
 
 from .. import kernel as KR
 from .. import kernel_inputs as K
+from .. import output_records as R
 from .. import state_layout as L
 from .. import transport as T
 from .dispersion2d import directional_coefficients, dispersion_step
@@ -73,12 +77,15 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
     work_d = np.zeros((KR.N_DISP, m))
     jd = np.zeros((KR.N_DISP, m + 1))
     press = np.zeros(n)
-    series = np.zeros((KR.N_SERIES, n_out))
+    series = np.zeros((R.N_SERIES, n_out))
     maps = np.zeros((KR.N_PROFILE, n_prof, n))
     totals = np.zeros((4, 6))
     info = np.zeros(KR.N_INFO)
-    acc = np.zeros(7)
-    rates = np.zeros(7)
+    cum = np.zeros(R.N_CUM)  # cumulative produced amounts (output_records), at t, t_prev and the last output
+    cum_prev = np.zeros(R.N_CUM)
+    cum_last = np.zeros(R.N_CUM)
+    delta = np.zeros(R.N_CUM)
+    rates = np.zeros(R.N_CUM)
 
     swi = prm[K.SWI]
     st[L.M1] = swi
@@ -91,10 +98,9 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
     dispersion = prm[K.ALPHA_D] + prm[K.ALPHA_D + 1] + prm[K.ALPHA_D + 2] + prm[K.DMOL] > 0.0
     solver = PressureSolver(grid, pressure_solver)
 
-    t = t_last = 0.0
+    t = t_prev = t_last = dp_prev = ramp = 0.0
     k_out = k_prof = slug = steps = 0
     dt_s = 0.0
-    cum_oil = 0.0
     field = None
     status = KR._properties(st, pr, prm, n, 0.0, info, t)
     if status == L.OK:
@@ -106,7 +112,7 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
         status = KR._properties(st, pr, prm, n, dt_s, info, t)
         if status != L.OK:
             break
-        if since_solve + 1 >= pressure_every or land:
+        if since_solve + 1 >= pressure_every or land or (k_out < n_out and out_pv[k_out] <= t):
             field = solver.solve(pr[L.LAMT].reshape(ny, nx))
             since_solve = 0
         else:
@@ -114,30 +120,25 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
         _localise_lagged(st, field, kappa_flat)
         ux, vy = field.ux, field.vy
 
-        # ---- records at the landed time
-        while k_out < n_out and t >= out_pv[k_out]:
-            series[KR.DP, k_out] = field.p_well * pa_per_scaled
-            series[KR.RECOVERY, k_out] = cum_oil / ooip if ooip > 0.0 else 0.0
-            span = t - t_last
-            if k_out == 0 or span <= 0.0:
-                advective_fluxes_2d(pr, nx, ny, ux, vy, False, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, fx, gy)
-                outlet_rates(pr, fx, ux, nx, ny, nx, rates)
-                total = rates[T.FW] + rates[T.FO] + rates[T.FS]  # the produced volume rate
-                snap = rates / total if total > 0.0 else rates
-                series[KR.OIL_CUT, k_out] = snap[T.FO]
-                series[KR.CS_OUT, k_out] = snap[T.FS]
-                series[KR.CP_OUT, k_out] = snap[T.FP] / snap[6] if snap[6] > 0.0 else 0.0
-                series[KR.SAL_OUT, k_out] = (snap[T.FA] / snap[T.FW] if snap[T.FW] > 0.0
-                                             else pr[L.C5, nx - 1::nx].mean())
-            else:
-                series[KR.OIL_CUT, k_out] = acc[T.FO] / span
-                series[KR.CS_OUT, k_out] = acc[T.FS] / span
-                series[KR.CP_OUT, k_out] = acc[T.FP] / acc[6] if acc[6] > 0.0 else 0.0
-                series[KR.SAL_OUT, k_out] = (acc[T.FA] / acc[T.FW] if acc[T.FW] > 0.0
-                                             else pr[L.C5, nx - 1::nx].mean())
-            acc[:] = 0.0
-            t_last = t
-            k_out += 1
+        # ---- records: the series at t = 0 from the initial state, later every output time the last step passed
+        dp_now = field.p_well * pa_per_scaled
+        if steps == 0:
+            advective_fluxes_2d(pr, nx, ny, ux, vy, False, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, fx, gy)
+            outlet_rates(pr, fx, ux, nx, ny, nx, rates)
+            total = rates[T.FW] + rates[T.FO] + rates[T.FS]  # the produced volume rate
+            snap = rates / total if total > 0.0 else rates
+            while k_out < n_out and out_pv[k_out] <= 0.0:
+                series[R.DP, k_out] = dp_now
+                series[R.RECOVERY, k_out] = 0.0
+                series[R.OIL_CUT, k_out] = snap[T.FO]
+                series[R.CS_OUT, k_out] = snap[T.FS]
+                series[R.CP_OUT, k_out] = snap[T.FP] / snap[R.CARRIER] if snap[R.CARRIER] > 0.0 else 0.0
+                series[R.SAL_OUT, k_out] = (snap[T.FA] / snap[T.FW] if snap[T.FW] > 0.0
+                                            else pr[L.C5, nx - 1::nx].mean())
+                k_out += 1
+        else:
+            k_out, t_last = R.record_outputs(series, out_pv, k_out, t_prev, t, dp_prev, dp_now, cum_prev, cum,
+                                             cum_last, t_last, ooip, pr[L.C5, nx - 1::nx].mean(), delta)
         while k_prof < n_prof and t >= prof_pv[k_prof]:
             KR._record_profile(st, pr, prm, n, maps, k_prof, press)
             maps[KR.P_PRES, k_prof] = field.p.ravel() * pa_per_scaled  # the 2-D pressure, not the 1-D integral
@@ -148,8 +149,11 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
         # ---- time step
         while slug < n_slug - 1 and t >= end_pv[slug]:
             slug += 1
-        dt, land, next_stop = KR.landing_step(stable_step(pr, ux, vy, nx, ny, dx, dy, cfl), t, end_pv[slug], out_pv,
-                                              k_out, prof_pv, k_prof)
+            ramp = 0.0
+        dt, ramp = KR.ramp_step(stable_step(pr, ux, vy, nx, ny, dx, dy, cfl), ramp, min(dx, dy), cfl)
+        dt, land, next_stop = KR.landing_step(dt, t, end_pv[slug], prof_pv, k_prof)
+        t_prev, dp_prev = t, dp_now
+        cum_prev[:] = cum
 
         # ---- explicit advection, halving the step until no component goes negative
         bad = -1
@@ -180,8 +184,7 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
         totals[1] += rates[:6] * dt
         outlet_rates(pr, fx, ux, nx, ny, nx, rates)
         totals[2] += rates[:6] * dt
-        acc += rates * dt
-        cum_oil += rates[T.FO] * dt
+        cum += rates * dt
         t = next_stop if land else t + dt
         dt_s = dt * prm[K.T_PV]
         steps += 1

@@ -3,7 +3,8 @@
 
 Same schedule, parameters, effects and output series as the 1-D model (``simulate.simulate``); the core is a
 ``LENGTH`` x ``DIAMETER`` slab (aspect ratio ``DIAMETER / LENGTH``) with the mean Darcy velocity ``QINJ / A`` of the
-1-D core, so the pore-volume time scale is the same. ``PERM`` is the reference permeability (the 1-D value; a
+1-D core, so the pore-volume time scale is the same. Per-slug injection rates (``Slug.rate_ml_min``) are 1-D only:
+a 2-D run rejects a slug whose rate differs from QINJ. ``PERM`` is the reference permeability (the 1-D value; a
 uniform field when ``permeability`` is None).
 """
 
@@ -95,6 +96,11 @@ def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, eff
     sched, resolved, strengths, registry, (nx, ny), pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl, check_cells=_check_cells_2d
     )
+    for i, slug in enumerate(sched.slugs):
+        if slug.rate_ml_min is not None and slug.rate_ml_min != resolved["QINJ"]:
+            raise ParameterError(f"slug {i} ({slug.name!r}): field 'rate_ml_min' = {slug.rate_ml_min!r} ml/min is not "
+                                 f"available in 2-D runs (one rate, QINJ = {resolved['QINJ']!r} ml/min); per-slug "
+                                 "rates run in 1-D")
     alpha_t_ratio = 0.1 if alpha_t_ratio is None else check_number("alpha_t_ratio", alpha_t_ratio, 0.0, 1.0)
     if pressure_every is None:
         pressure_every = 1

@@ -1,4 +1,4 @@
-"""Main job (until the calibration pipelines land): the prior spread of the BCF1–3 corefloods against the bundled data.
+"""Prior spread of BCF1–3 (LHS of the Table 3.2 space through the simulator) against the bundled data.
 
 Latin-hypercube samples of the thesis's reduced parameter space (Table 3.2 ranges) are run through the forward model
 for the three bundled injection schedules (Table 2.5); the bundled lab-like measurements enter through content-hashed

@@ -1,17 +1,17 @@
 """The main job: the thesis's whole workflow on the bundled BCF1-3 data, one cached DAG, one HTML report.
 
-1. ``screening.*``: Sobol' screening of the Table 3.1 sub-models on BCF1 (Fig. 3.2; ``pipelines/screening.py``).
+1. ``screening.*``: Sobol' screening of the Table 3.1 sub-models on BCF1 (Fig. 3.2; pipeline ``screening``).
 2. ``hm.*``: chapter 3 -- Table 3.2 design -> simulator -> PCE -> NSGA-II on BCF1, held-out BCF2/BCF3
-   (Figs. 3.10-3.14; ``pipelines/history_matching.py``).
+   (Figs. 3.10-3.14; pipeline ``history_matching``).
 3. ``proxy.*``: the chapter-3 proxies checked on independent simulator runs: the PCE and a PC-Kriging model on the
    same training runs (Figs. 3.4-3.5, 3.8, 3.15), and the PCE's convergence with the design size (Algorithm 2,
    Fig. 3.3).
 4. ``bc.*``: chapter 4 -- Table 4.1 design -> PCE -> MCMC -> posterior predictive on BCF1-3 (Apps. B-E, Figs.
-   4.4-4.5; ``pipelines/bayesian_calibration.py``).
+   4.4-4.5; pipeline ``bayesian_calibration``).
 5. ``slug.*``: slug sizes designed under the posterior with EEIHV, oil price drifting up and down (Figs. 4.6-4.10;
-   ``pipelines/slug_design.py``).
+   pipeline ``slug_design``).
 6. ``gap.*``: where the calibrated model misses the data and which unmodelled effect explains it
-   (``pipelines/gap_diagnosis.py``).
+   (pipeline ``gap_diagnosis``).
 
 Nodes shared by several parts (the bundled observations, for one) are computed once; a part already run on its own
 with the same settings comes from the cache. ``--quick`` runs the same DAG with small budgets (a first look).
@@ -22,18 +22,10 @@ with the same settings comes from the cache. ``--quick`` runs the same DAG with 
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import spflow
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import bayesian_calibration  # noqa: E402
-import gap_diagnosis  # noqa: E402
-import history_matching  # noqa: E402
-import screening  # noqa: E402
-import slug_design  # noqa: E402
+from spflow.pipelines import bayesian_calibration, gap_diagnosis, history_matching, screening, slug_design
 
 
 def proxy_check(p: spflow.Pipeline, samples: int = 100, cells: int = 100, seed: int = 7) -> None:
@@ -95,9 +87,10 @@ def report(result: spflow.RunResult, outdir: Path) -> dict[str, list[str]]:
     sections = {}
     for prefix, module in (("screening", screening), ("hm", history_matching), ("bc", bayesian_calibration),
                            ("slug", slug_design), ("gap", gap_diagnosis)):
-        sub = outdir / module.__name__
+        part = module.__name__.rpartition(".")[2]
+        sub = outdir / part
         sub.mkdir(parents=True, exist_ok=True)
-        sections[module.__name__] = module.report(result.scoped(prefix), sub)
+        sections[part] = module.report(result.scoped(prefix), sub)
     proxies = outdir / "proxy_validation"
     proxies.mkdir(exist_ok=True)
     sections["proxy_validation"] = _proxy_report(result, proxies)

@@ -18,13 +18,12 @@ The thesis's initial model calibration (Fig. 2.1, section 2.12, Algorithm 1 line
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 from pathlib import Path
 
 import spflow
 from spflow.plugins.design.thesis_tables import TABLE_3_2, TABLE_4_1
 
-_HERE = Path(__file__).resolve().parent
 #: the front ends and the calibration table whose parameter names (and ranges for unfitted names) they use
 FRONT_ENDS = {"history_matching": TABLE_3_2, "bayesian_calibration": TABLE_4_1}
 #: the uncertain parameters of Tables 3.2/4.1 that no support experiment measures (their table ranges are kept)
@@ -44,11 +43,8 @@ FITS = {
 
 
 def _front_end(name: str):
-    """The front-end pipeline module (``pipelines/<name>.py``, loaded by path like ``spflow run`` does)."""
-    spec = importlib.util.spec_from_file_location(f"_lab_priors_{name}", _HERE / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """The front-end pipeline module (the built-in ``spflow.pipelines.<name>``)."""
+    return importlib.import_module(f"spflow.pipelines.{name}")
 
 
 def pipeline(front_end: str | None = "history_matching", mode: str = "relative", relative: float = 0.2,

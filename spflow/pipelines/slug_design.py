@@ -12,16 +12,12 @@ drifting up (``design_up``, μ = +1e-5 per step) and down (``design_down``, μ =
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 
 import spflow
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import bayesian_calibration  # noqa: E402
+from spflow.pipelines import bayesian_calibration
 
 DRIFTS = {"design_up": 1.0e-5, "design_down": -1.0e-5}
 LABELS = {"design_up": "positive drift", "design_down": "negative drift"}
