@@ -76,6 +76,9 @@ def main() -> None:
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--max-nfev", type=int, default=15)
     p.add_argument("--max-effects", type=int, default=3)
+    p.add_argument("--drop-surfactant-assay", action="store_true",
+                   help="remove c_surfactant_out from the data (all zero in polymer floods; older diagnoses "
+                        "aborted on it)")
     args = p.parse_args()
     parallel = None
     if args.jobs > 1:
@@ -87,6 +90,8 @@ def main() -> None:
     for seed in range(args.seeds):
         data = {n: coreflood(n, s, truth, args.cells * args.refine, 100 * seed + k)
                 for k, (n, s) in enumerate(schedules.items())}
+        if args.drop_surfactant_assay:
+            data = {n: ds.drop_vars("c_surfactant_out") for n, ds in data.items()}
         for case in args.cases:
             base = BaseModel.from_mapping({"cells": args.cells, "parameters": parameters,
                                            "effects": {name: 0.0 for name in WITHHELD[case]}})
