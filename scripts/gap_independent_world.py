@@ -76,6 +76,7 @@ def main() -> None:
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--max-nfev", type=int, default=15)
     p.add_argument("--max-effects", type=int, default=3)
+    p.add_argument("--variables", nargs="+", default=["dp", "oil_cut"])
     p.add_argument("--drop-surfactant-assay", action="store_true",
                    help="remove c_surfactant_out from the data (all zero in polymer floods; older diagnoses "
                         "aborted on it)")
@@ -95,13 +96,16 @@ def main() -> None:
         for case in args.cases:
             base = BaseModel.from_mapping({"cells": args.cells, "parameters": parameters,
                                            "effects": {name: 0.0 for name in WITHHELD[case]}})
-            options = Options(max_nfev=args.max_nfev, replicates=50, max_effects=args.max_effects)
+            options = Options(max_nfev=args.max_nfev, replicates=50, max_effects=args.max_effects,
+                              variables=tuple(args.variables))
             start = time.perf_counter()
             g = diagnose([data[names[0]], data[names[1]]], [data[names[2]]], base, catalogue, options,
                          parallel=parallel)
             s = summary(report_dataset(g))
-            print(json.dumps({"setup": args.setup, "cells": args.cells, "case": case, "seed": seed, "verdict": s["verdict"],
-                              "ambiguity_set": s["ambiguity_set"], "final_model": s["final_model"],
+            print(json.dumps({"setup": args.setup, "cells": args.cells, "variables": args.variables, "case": case,
+                              "seed": seed, "verdict": s["verdict"],
+                              "ambiguity_set": s["ambiguity_set"], "accepted_steps": s["accepted_steps"],
+                              "final_model": s["final_model"],
                               "effects": s["effects"], "chi2_base": s["fit"]["chi2_base"], "dof": s["fit"]["dof"],
                               "chi2_base_measurement_only": (s.get("numerical_error") or {}).get(
                                   "chi2_base_measurement_only"),
