@@ -28,6 +28,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.forward.effects import Effect
 from spflow.plugins.forward.simulate import simulate
 from spflow.io import load_coreflood
+from spflow.study import Study, StudyError, bundled_study, load_study
 from spflow import synthetic
 
 try:
@@ -51,12 +52,16 @@ __all__ = [
     "Stage",
     "StageContext",
     "StageError",
+    "Study",
+    "StudyError",
     "Variable",
     "__version__",
+    "bundled_study",
     "canonical_hash",
     "get_registry",
     "hookimpl",
     "load_coreflood",
+    "load_study",
     "register_plugin",
     "reset_registry",
     "run",

@@ -38,6 +38,7 @@ from spflow.core.plugins import get_registry
 from spflow.plugins.gap.command import add_parser as add_diagnose_parser
 from spflow.plugins.gap.command import main as diagnose_command
 from spflow.export.command import add_parser as add_export_parser, main as export_command
+from spflow.study.command import add_parser as add_study_parsers, main as study_command
 
 
 def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) -> Pipeline:
@@ -218,13 +219,15 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
     add_diagnose_parser(sub)
     add_export_parser(sub)
+    add_study_parsers(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
-               "diagnose": diagnose_command, "export": export_command, "compare": export_command}[args.command]
+               "diagnose": diagnose_command, "export": export_command, "compare": export_command,
+               "init": study_command, "check": study_command}[args.command]
     try:
         return handler(args)
     except SpflowError as exc:

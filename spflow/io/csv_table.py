@@ -9,6 +9,9 @@ File layout (``docs/data.md``)::
     # units: dp=kPa, recovery=%         units per (spflow) column; defaults Pa, PV, fraction, ml, ppm
     # columns: Inj PV=pv, dP=dp         file column -> spflow column
     # noise_pressure_relative: 0.02     measurement-noise attrs (any NoiseModel field, with prefix noise_)
+    # core_length: 30 cm                core data with units (core_length, core_diameter, permeability, rate,
+    # porosity: 0.19                    porosity, swi) or in the format's units (core_length_m, ..., qinj_ml_min;
+    # rate_ml_min: 0.5                  rate_ml_min is qinj_ml_min), stored as the attrs of spflow.io.metadata
     pv,dp,oil_cut,recovery
     0.02,7830,,
     0.05,7790,1.0,0.0625
@@ -17,7 +20,8 @@ Columns: ``pv`` (required, injected PV; strictly increasing), ``dp``, ``oil_cut`
 ``c_polymer_out``, ``c_surfactant_out``, ``salinity_out``. An empty cell means "not measured at this PV". A row
 with a tube column filled is a tube ending at its ``pv``; the tube starts at the previous tube's end (0 for the
 first). Other header keys are kept as ``meta_<key>`` attrs. Errors are ``ValueError`` naming the file, the line
-(1-based, as an editor shows it) and the column.
+(1-based, as an editor shows it) and the column. The file must be UTF-8 text; empty, binary and UTF-16 files are
+named as such. PV must lie in ``[0, MAX_PV]``, ``dp`` must not be negative and ``recovery`` must not decrease.
 """
 
 from __future__ import annotations
@@ -32,8 +36,10 @@ import xarray as xr
 
 from spflow.synthetic.noise_model import NoiseModel
 
-from .format import TUBE_VARIABLES, VARIABLES, build_coreflood
+from .format import MAX_PV, TUBE_VARIABLES, VARIABLES, build_coreflood
 from .lab_units import ALLOWED_UNITS, DEFAULT_UNITS, factor
+from .metadata import core_unit
+from .quantities import VELOCITY_UNITS, parse_quantity, velocity_to_rate
 
 __all__ = ["read_csv"]
 
@@ -41,6 +47,43 @@ _COLUMNS = tuple(ALLOWED_UNITS)
 _FLOAT_KEYS = {"pore_volume_ml", "ooip_ml"} | {f"noise_{f.name}" for f in fields(NoiseModel)}
 _TEXT_KEYS = {"experiment", "schedule", "source", "units", "columns"}
 _VOLUME_KEYS = ("oil_cut", "recovery", "oil_volume")
+#: header key with units -> (core attr, quantity kind)
+_CORE_KEYS = {"core_length": ("core_length_m", "length"), "core_diameter": ("core_diameter_m", "length"),
+              "permeability": ("permeability_md", "permeability"), "rate": ("qinj_ml_min", "rate"),
+              "porosity": ("porosity", "fraction"), "swi": ("swi", "fraction")}
+#: header key in the format's units -> core attr
+_CORE_PLAIN = {"core_length_m": "core_length_m", "core_diameter_m": "core_diameter_m",
+               "permeability_md": "permeability_md", "qinj_ml_min": "qinj_ml_min", "rate_ml_min": "qinj_ml_min"}
+
+
+def _core_value(key: str, value: str, at: str):
+    """``(core attr, value in the format's unit or (velocity, unit) for a rate given as a velocity)``."""
+    if key in _CORE_PLAIN:
+        attr = _CORE_PLAIN[key]
+        try:
+            return attr, float(value)
+        except ValueError:
+            raise ValueError(f"{at}: {value.strip()!r} is not a number (in {core_unit(attr)!r}; for other units "
+                             f"use the key {next(k for k, (a, _) in _CORE_KEYS.items() if a == attr)!r})") from None
+    attr, kind = _CORE_KEYS[key]
+    x, unit = parse_quantity(value.strip(), kind, at)
+    return attr, ((x, unit) if unit in VELOCITY_UNITS else x)
+
+
+def _read_text(path: Path, where: str) -> str:
+    raw = path.read_bytes()
+    if not raw.strip():
+        raise ValueError(f"{where}: empty file; expected a CSV coreflood (header lines, column names, rows)")
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        raise ValueError(f"{where}: the file is UTF-16 encoded; save it as UTF-8 (plain CSV) text")
+    nul = raw.find(b"\x00")
+    if nul >= 0:
+        raise ValueError(f"{where}: binary file (a NUL byte at byte {nul}); expected UTF-8 CSV text")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{where}: not UTF-8 text (undecodable byte at position {exc.start}); expected UTF-8 CSV "
+                         "text") from None
 
 
 def _pairs(text: str, where: str) -> dict[str, str]:
@@ -54,7 +97,7 @@ def _pairs(text: str, where: str) -> dict[str, str]:
 
 
 def _read_header(lines, where):
-    header, first = {}, None
+    header, first, core_lines = {}, None, {}
     for i, line in enumerate(lines):
         stripped = line.strip()
         if not stripped:
@@ -67,7 +110,13 @@ def _read_header(lines, where):
         if not sep or not key:
             continue  # a plain comment
         at = f"{where}, line {i + 1}, header key {key!r}"
-        if key in _FLOAT_KEYS:
+        if key in _CORE_KEYS or key in _CORE_PLAIN:
+            attr, x = _core_value(key, value, at)
+            if attr in core_lines:
+                raise ValueError(f"{at}: {attr!r} is already given on line {core_lines[attr]}; give it once")
+            core_lines[attr] = i + 1
+            header[attr] = x
+        elif key in _FLOAT_KEYS:
             try:
                 x = float(value)
             except ValueError:
@@ -82,6 +131,12 @@ def _read_header(lines, where):
             header[key if key in _TEXT_KEYS else f"meta_{key}"] = value.strip()
     if first is None:
         raise ValueError(f"{where}: no column-name line (the file holds only header lines or is empty)")
+    rate = header.get("qinj_ml_min")
+    if isinstance(rate, tuple):
+        if "core_diameter_m" not in header:
+            raise ValueError(f"{where}, line {core_lines['qinj_ml_min']}, header key 'rate': a rate given as a "
+                             f"velocity ({rate[1]}) needs the core diameter in the header (core_diameter)")
+        header["qinj_ml_min"] = velocity_to_rate(rate[0], rate[1], header["core_diameter_m"])
     return header, first
 
 
@@ -126,9 +181,11 @@ def _cell(text, line, file_col, where):
 
 
 def _check_range(x, column, line, file_col, unit, where):
-    lo, hi = (0.0, math.inf) if column == "pv" else VARIABLES[column][3]
+    lo, hi = (0.0, MAX_PV) if column == "pv" else VARIABLES[column][3]
     if not lo <= x <= hi:
-        label = {"oil_volume": "negative volume", "pv": "negative PV"}.get(column, "out of range")
+        label = {"oil_volume": "negative volume", "dp": "negative dp"}.get(column, "out of range")
+        if column == "pv":
+            label = "negative PV" if x < lo else "absurd PV"
         target = "PV" if column == "pv" else VARIABLES[column][1]
         raise ValueError(f"{where}, line {line}, column {file_col!r}: {label}: {x!r} {target} (converted from unit "
                          f"{unit!r}) is outside the allowed range [{lo:g}, {hi:g}] {target}")
@@ -140,7 +197,7 @@ def read_csv(path, *, units=None, columns=None) -> tuple[xr.Dataset, str | None]
     where = f"file {str(path)!r}"
     if not path.is_file():
         raise ValueError(f"{where}: no such file")
-    lines = path.read_text(encoding="utf-8-sig").splitlines()
+    lines = _read_text(path, where).splitlines()
     header, first = _read_header(lines, where)
     reader = csv.reader(lines[first:])
     names = [n.strip() for n in next(reader)]
@@ -191,6 +248,13 @@ def read_csv(path, *, units=None, columns=None) -> tuple[xr.Dataset, str | None]
                 raise ValueError(f"{where}, line {line}, column {cols[c]!r}: missing value in a tube row (a tube "
                                  f"row needs every one of {[k for k in _VOLUME_KEYS if k in cols]})")
     tubes = {c: np.array([np.nan if v[c] is None else v[c] for _, v in tube_rows]) for c in tube_cols}
+    if "recovery" in tubes:
+        down = np.flatnonzero(np.diff(tubes["recovery"]) < 0.0)
+        if down.size:
+            line, k = tube_rows[down[0] + 1][0], down[0] + 1
+            raise ValueError(f"{where}, line {line}, column {cols['recovery']!r}: decreasing recovery: "
+                             f"{tubes['recovery'][k]!r} after {tubes['recovery'][k - 1]!r}; cumulative recovery must "
+                             "not decrease (allowed: >= the previous tube's, within [0, 1])")
     end = np.array([v["pv"] for _, v in tube_rows])
     start = np.concatenate(([0.0], end[:-1]))
     _derive(tubes, start, end, header, [line for line, _ in tube_rows], where)

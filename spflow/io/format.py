@@ -11,7 +11,9 @@ Two grids, because a lab measures on two:
 Any QoI may be absent (partial data); attrs ``measured`` and ``missing`` list the QoIs (``dp``, ``oil_cut``,
 ``recovery``) present and absent. Required attrs: ``experiment``, ``source``; optional: ``schedule`` (JSON text
 ``{"name": ..., "slugs": [...]}``), ``generator``, ``seed``, ``spflow_version``, ``pore_volume_ml``, ``ooip_ml``,
-``noise_*`` (measurement model, see :class:`spflow.synthetic.NoiseModel`).
+core data with units (``core_length_m`` + ``core_length_m_units`` ..., :mod:`spflow.io.metadata`), ``noise_*``
+(measurement model, see :class:`spflow.synthetic.NoiseModel`). Physically impossible data are rejected: a negative
+``dp``, a decreasing ``recovery``, a PV outside ``[0, MAX_PV]``.
 """
 
 from __future__ import annotations
@@ -23,14 +25,14 @@ import xarray as xr
 
 from spflow.plugins.forward.schedule import as_schedule
 
-__all__ = ["QOIS", "VARIABLES", "TUBE_VARIABLES", "schedule_json", "build_coreflood", "check_coreflood"]
+__all__ = ["QOIS", "VARIABLES", "TUBE_VARIABLES", "MAX_PV", "schedule_json", "build_coreflood", "check_coreflood"]
 
 #: the quantities of interest a calibration fits
 QOIS = ("dp", "oil_cut", "recovery")
 
 #: variable -> (dim, units, long name, allowed [low, high])
 VARIABLES = {
-    "dp": ("pv", "Pa", "pressure drop across the core (transducer reading)", (-np.inf, np.inf)),
+    "dp": ("pv", "Pa", "pressure drop across the core (transducer reading)", (0.0, np.inf)),
     "oil_cut": ("pv_tube", "1", "oil volume fraction of the tube", (0.0, 1.0)),
     "recovery": ("pv_tube", "1", "cumulative oil recovery at pv_tube_end, fraction of OOIP", (0.0, 1.0)),
     "oil_volume": ("pv_tube", "ml", "oil volume read in the tube", (0.0, np.inf)),
@@ -39,6 +41,8 @@ VARIABLES = {
     "salinity_out": ("pv_tube", "ppm", "salinity (TDS) of the tube's aqueous phase", (0.0, np.inf)),
 }
 TUBE_VARIABLES = tuple(name for name, spec in VARIABLES.items() if spec[0] == "pv_tube")
+#: the largest injected PV a coreflood may report (more is a unit or column mix-up, not a coreflood)
+MAX_PV = 1.0e3
 _NAN_ALLOWED = ("c_polymer_out", "c_surfactant_out", "salinity_out")
 
 
@@ -103,9 +107,10 @@ def check_coreflood(ds: xr.Dataset, source: str) -> xr.Dataset:
             x = ds[coord].values
             if ds[coord].attrs.get("units") != "PV":
                 _fail(source, f"coordinate {coord!r} has units {ds[coord].attrs.get('units')!r}; expected 'PV'")
-            bad = np.flatnonzero(~np.isfinite(x) | (x < 0.0))
+            bad = np.flatnonzero(~np.isfinite(x) | (x < 0.0) | (x > MAX_PV))
             if bad.size:
-                _fail(source, f"coordinate {coord!r} index {bad[0]}: {float(x[bad[0]])!r} is not a PV in [0, inf)")
+                _fail(source, f"coordinate {coord!r} index {bad[0]}: {float(x[bad[0]])!r} is not a PV in "
+                      f"[0, {MAX_PV:g}]")
             steps = np.flatnonzero(np.diff(x) <= 0.0)
             if steps.size:
                 i = steps[0] + 1
@@ -125,4 +130,11 @@ def check_coreflood(ds: xr.Dataset, source: str) -> xr.Dataset:
         if bad.size:
             _fail(source, f"variable {name!r} index {bad[0]} = {float(x[bad[0]])!r} is outside [{lo:g}, {hi:g}] "
                   f"(units {unit!r})")
+    if "recovery" in ds:
+        x = ds["recovery"].values
+        down = np.flatnonzero(np.diff(x) < 0.0)
+        if down.size:
+            i = down[0] + 1
+            _fail(source, f"variable 'recovery' decreases at index {i}: {float(x[i])!r} after {float(x[i - 1])!r}; "
+                  "cumulative recovery must not decrease (allowed: recovery[i] >= recovery[i-1], within [0, 1])")
     return ds

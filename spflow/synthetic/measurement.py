@@ -26,6 +26,7 @@ import numpy as np
 import xarray as xr
 
 from spflow.io.format import build_coreflood
+from spflow.io.metadata import CORE_ATTRS, core_unit
 
 from .core_volumes import ooip_ml, pore_volume_ml
 from .dead_volume import delay
@@ -38,9 +39,6 @@ __all__ = ["measure"]
 #: assay -> whether it is averaged over the tube's water (else over the whole tube)
 _ASSAYS = (("c_polymer_out", True), ("c_surfactant_out", False), ("salinity_out", True))
 _EMPTY_TUBES = ("missing", "limit")
-#: lab-known core data copied into the measured Dataset (attr name, forward-model parameter)
-_CORE_ATTRS = (("core_length_m", "LENGTH"), ("core_diameter_m", "DIAMETER"), ("porosity", "PORO"),
-               ("swi", "SWI"), ("qinj_ml_min", "QINJ"))
 
 
 def measure(clean: xr.Dataset, noise: NoiseModel, seed: int, *, experiment: str, source: str,
@@ -55,10 +53,10 @@ def measure(clean: xr.Dataset, noise: NoiseModel, seed: int, *, experiment: str,
     if empty_tubes not in _EMPTY_TUBES:
         raise ValueError(f"empty_tubes must be one of {list(_EMPTY_TUBES)}, got {empty_tubes!r}")
     missing = [v for v in ("dp", "oil_cut", *(name for name, _ in _ASSAYS)) if v not in clean]
-    missing += [f"param_{p}" for _, p in _CORE_ATTRS if f"param_{p}" not in clean.attrs]
+    missing += [f"param_{p}" for p in CORE_ATTRS.values() if f"param_{p}" not in clean.attrs]
     if missing or "pv" not in clean.coords:
         raise ValueError(f"clean must be a simulate() result (coordinate 'pv'); missing {missing or ['pv']}")
-    params = {p: clean.attrs[f"param_{p}"] for _, p in _CORE_ATTRS}
+    params = {p: clean.attrs[f"param_{p}"] for p in CORE_ATTRS.values()}
     pv_ml, oil_in_place_ml = pore_volume_ml(params), ooip_ml(params)
     rng_pressure, rng_oil, rng_assay = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3))
 
@@ -91,7 +89,8 @@ def measure(clean: xr.Dataset, noise: NoiseModel, seed: int, *, experiment: str,
         tubes[name] = np.maximum(mean * (1.0 + noise.concentration_relative * assay_error[row]), 0.0)
 
     attrs = {"pore_volume_ml": pv_ml, "ooip_ml": oil_in_place_ml, "dead_volume_pv": v_dead}
-    attrs.update({name: float(params[p]) for name, p in _CORE_ATTRS})
+    for name, p in CORE_ATTRS.items():  # the lab-known core data, with units (spflow.io.metadata)
+        attrs.update({name: float(params[p]), f"{name}_units": core_unit(name)})
     attrs.update(noise.to_attrs())
     if schedule is not None:
         attrs["schedule"] = schedule

@@ -2,7 +2,10 @@
 
 Output dims (``sample``, ``experiment``, ``pv``): the response variables of :func:`simulate` on a common PV grid.
 Experiments of different total PV share one grid (the union of their own grids, :func:`common_grid`) and are NaN
-where a point is not theirs (past their end, or another experiment's off-step end point). Samples
+where a point is not theirs (past their end, or another experiment's off-step end point). An experiment is a
+bundled name or a mapping ``{"name", "schedule", "params"}`` (:mod:`spflow.plugins.forward.experiments`) whose
+``params`` override ``fixed`` for that experiment (its own core, rate, fluids); the sample's values override both.
+Samples
 run in parallel with the node's joblib budget; the simulator is deterministic, so serial and parallel runs are
 bit-identical. Every sample's parameters are validated before any simulation starts.
 """
@@ -18,7 +21,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN
 from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.parameters import resolve_params
-from spflow.plugins.forward.schedule import BCF_SCHEDULES, as_schedule
+from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.simulate import common_grid, simulate
 
 #: Response variables of the simulator and their units.
@@ -42,20 +45,20 @@ RESPONSES = DatasetSchema(
 
 
 def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step):
-    params = dict(fixed, **row)
-    return [simulate(exp, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step) for exp in experiments]
+    return [simulate(exp.schedule, dict(fixed, **exp.params, **row), cells=cells, effects=effects, scheme=scheme,
+                     pv_step=pv_step) for exp in experiments]
 
 
 class Forward(Stage):
     name = "forward"
-    version = "1"
+    version = "2"
     description = "SP coreflood simulator over a design and a set of experiments"
     inputs = {"design": DESIGN}
     optional_inputs = frozenset({"design"})
     output = RESPONSES
     params = {
-        "experiments": Param(list, ["BCF1", "BCF2", "BCF3"], choices=sorted(BCF_SCHEDULES),
-                             doc="bundled injection schedules (thesis Table 2.5)"),
+        "experiments": Param(list, ["BCF1", "BCF2", "BCF3"],
+                             doc="bundled names (thesis Table 2.5) or {name, schedule, params} mappings"),
         "fixed": Param(dict, {}, doc="parameter overrides applied to every sample (UTCHEM names)"),
         "effects": Param(dict, {}, doc="effect name -> strength (0 = off); see `spflow list effects`"),
         "cells": Param(int, 100, bounds=(4, 5000), doc="grid cells"),
@@ -68,6 +71,10 @@ class Forward(Stage):
         """The stage's source plus every source file of the simulator, so that any physics edit reruns the node."""
         return f"{super().code_fingerprint()}-{source_digest()[:16]}"
 
+    def __init__(self, **params):
+        super().__init__(**params)
+        forward_experiments(self.params["experiments"], self.params["fixed"])  # names, schedules, params: now
+
     def _rows(self, design: xr.Dataset | None) -> list[dict[str, float]]:
         if design is None:
             return [{}]
@@ -75,18 +82,19 @@ class Forward(Stage):
         return [dict(zip(names, map(float, values))) for values in design["values"].values]
 
     def run(self, ctx: StageContext, design: xr.Dataset | None = None) -> xr.Dataset:
-        experiments = list(self.params["experiments"])
         fixed, effects = dict(self.params["fixed"]), dict(self.params["effects"])
+        experiments = forward_experiments(self.params["experiments"], fixed)
         rows = self._rows(design)
         for row in rows:  # validate everything before any simulation
-            resolve_params(dict(fixed, **row))
+            for exp in experiments:
+                resolve_params(dict(fixed, **exp.params, **row))
         args = (self.params["cells"], effects, self.params["scheme"], self.params["pv_step"])
         from joblib import delayed
 
         runs = ctx.parallel()(
             delayed(_run_sample)(experiments, fixed, row, *args) for row in ctx.progress(rows, what="samples")
         )
-        total = np.array([as_schedule(e).total_pv for e in experiments])
+        total = np.array([e.schedule.total_pv for e in experiments])
         grid, positions = common_grid(total, self.params["pv_step"])
         data = {name: np.full((len(rows), len(experiments), grid.size), np.nan) for name in RESPONSE_UNITS}
         for i, sample_runs in enumerate(runs):
@@ -97,7 +105,7 @@ class Forward(Stage):
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
             | {"total_pv": ("experiment", total, {"units": "PV"})},
-            coords={"sample": np.arange(len(rows)), "experiment": experiments, "pv": grid},
+            coords={"sample": np.arange(len(rows)), "experiment": [e.name for e in experiments], "pv": grid},
             attrs={"cells": self.params["cells"], "scheme": self.params["scheme"]},
         )
         out["pv"].attrs["units"] = "PV"

@@ -20,6 +20,7 @@ import xarray as xr
 
 from spflow.core.errors import ParameterError
 from spflow.io import load_coreflood
+from spflow.io.metadata import core_params
 from spflow.plugins.forward.schedule import Schedule, as_schedule
 from spflow.plugins.forward.simulate import common_grid, output_grid
 from spflow.plugins.observations import on_simulator_grid
@@ -29,9 +30,6 @@ __all__ = ["Experiment", "load_experiments", "observed_experiment", "MEASURABLE"
 
 #: variables a diagnosis can use (the simulator's responses that a lab measures)
 MEASURABLE = ("dp", "oil_cut", "recovery", "c_polymer_out", "c_surfactant_out", "salinity_out")
-#: coreflood attr -> forward-model parameter
-_CORE_ATTRS = (("core_length_m", "LENGTH"), ("core_diameter_m", "DIAMETER"), ("porosity", "PORO"),
-               ("swi", "SWI"), ("qinj_ml_min", "QINJ"))
 
 
 @dataclass(frozen=True)
@@ -72,7 +70,7 @@ def _from_attrs(name: str, schedule: Schedule, attrs: Mapping, pv: np.ndarray, p
                 observed: dict[str, np.ndarray]) -> Experiment:
     """The :class:`Experiment` of coreflood attrs ``attrs`` (core data, ``noise_*``, volumes) and its series."""
     noise, from_data = _noise(attrs, name)
-    core = {param: float(attrs[attr]) for attr, param in _CORE_ATTRS if attr in attrs}
+    core = core_params(attrs)
     return Experiment(name, schedule, core, noise, from_data, pv, pv_step, observed,
                       float(attrs["pore_volume_ml"]) if "pore_volume_ml" in attrs else None,
                       float(attrs["ooip_ml"]) if "ooip_ml" in attrs else None)
