@@ -6,16 +6,15 @@ polymer adsorption must be found, with the truth's strength."""
 
 import json
 
-import numpy as np
 import pytest
 
 from spflow.cli import main
+from spflow.core.stage import StageContext
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.forward.simulate import simulate
 from spflow.plugins.gap.report import summary
 from spflow.plugins.gap.stage import Diagnose
-from spflow.core.stage import StageContext
 from spflow.synthetic import NoiseModel, measure
 
 CELLS = 15
