@@ -102,3 +102,8 @@ def test_without_the_numerical_error_the_null_gap_is_real_but_nothing_is_declare
     assert result["effects"] == [] and result["final_model"] == "base"
     assert result["tried_not_declared"] and "tried, not declared: " in printed
     assert "not attributable to a catalogued mechanism" in printed and "effect " not in printed
+    # no single effect passed with a significant gap left: the joint search ran over the pool, found no
+    # admissible set, and its forward runs are counted
+    search = result["search"]
+    assert search["chosen"] == [] and search["admissible"] == [] and set(search["pool"]) <= set(CATALOGUE)
+    assert 0 < search["forward_runs"] < result["forward_runs"]

@@ -358,10 +358,12 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     accepted = [[n for n in names if n == names[0] or all(n not in later for later in accepted[k + 1:])]
                 for k, names in enumerate(accepted)]  # an effect accepted later is no longer ambiguous
 
-    # joint search over the shortlisted pool when a significant calibration gap is left (subsets.py)
+    # joint search over the shortlisted pool when the greedy path found fewer than two effects and left a
+    # significant calibration gap (subsets.py; the failure mode of compensating effects -- with two or more effects
+    # found greedily the search is skipped: its joint refits would cost several times the whole diagnosis)
     search, pool, search_runs = None, [], 0
     gap_left = chi2.sf(reference.chi2, dof - len(reference.candidates)) < options.alpha
-    if pvalue < options.alpha and gap_left and options.max_effects >= 2 and steps:
+    if pvalue < options.alpha and gap_left and len(accepted) < 2 and options.max_effects >= 2 and steps:
         first = steps[0]
         ranked = sorted(first.scores, key=lambda n: -first.scores[n].delta_elpd)
         z = dict(zip(first.screen.names, first.screen.best_z()))
