@@ -66,7 +66,7 @@ class Options:
     pv_step: float = 0.1
     alpha: float = 0.01
     shortlist: int = 3
-    max_effects: int = 3
+    max_effects: int = 2
     max_nfev: int = 30
     starts: int = 1
     nuisance_scale: float = 0.5

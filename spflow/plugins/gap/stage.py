@@ -58,7 +58,9 @@ OPTION_PARAMS = {
                      doc="grid step (a multiple of the transducer interval keeps the AR(1) model exact)"),
     "alpha": Param(float, 0.01, bounds=(1e-6, 0.5), doc="significance level of the calibration-gap test and cells"),
     "shortlist": Param(int, 3, bounds=(1, 20), doc="candidates refitted per step (plus ambiguity partners)"),
-    "max_effects": Param(int, 3, bounds=(1, 5), doc="effects in the final model at most (greedy and joint search)"),
+    "max_effects": Param(int, 2, bounds=(1, 5),
+                         doc="effects in the final model at most (greedy and joint search; 3 finds three "
+                             "coexisting effects)"),
     "subset_pool": Param(int, 4, bounds=(1, 8),
                          doc="shortlisted effects whose subsets (up to max_effects) are refitted jointly"),
     "numerical_error": Param(bool, True, doc="add the base model's own numerical error (2x cells; 2x cells "
