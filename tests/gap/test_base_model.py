@@ -38,6 +38,9 @@ def test_tied_parameters_and_defaults():
      "set by more than one"),
     ({"parameters": {"AD31": [0, 2]}, "fixed": {"AD31": 0.3}}, "both \\[fixed\\] and calibrated"),
     ({"parameters": {"AD31": [0, 2]}, "cells": 2}, r"'cells' must be an integer in \[4, 2000\]"),
+    ({"parameters": {"AD31": [0, 2]}, "scheme": "weno"}, r"'scheme' must be one of \['tvd', 'upwind'\]"),
+    ({"parameters": {"AD31": [0, 2]}, "pv_step": 0.5}, r"'pv_step' must be in \[0.0001, 0.1\] PV"),
+    ({"parameters": {"AD31": [0, 2]}, "pv_step": "fine"}, "'pv_step' must be a finite number"),
     ({"parameters": {"AD31": [0, 2]}, "effects": {"dispersion": 99}}, r"allowed \[0, 10\]"),
     ({"parameters": {"AD31": [0, 2]}, "schedules": {"x": "BCF9"}}, "unknown schedule name 'BCF9'"),
 ])

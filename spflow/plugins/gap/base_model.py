@@ -5,6 +5,8 @@ A base model is given as a mapping (a TOML file for ``spflow diagnose --base``, 
 .. code-block:: toml
 
     cells = 60                     # grid cells of every forward run
+    scheme = "tvd"                 # transport scheme of every forward run: "tvd" (default) or "upwind"
+    pv_step = 0.01                 # output PV step of every forward run (under the measurement chain)
     [effects]                      # base-model effect strengths; unlisted effects keep their default strength
     capillary_pressure = 0.0
     [fixed]                        # fixed forward-model parameters (UTCHEM names)
@@ -38,7 +40,10 @@ from spflow.plugins.forward.schedule import as_schedule
 __all__ = ["CalibratedParameter", "BaseModel", "TABLE_3_2_BASE", "unit_to_value", "value_to_unit"]
 
 _SPECS = {p.name: p for p in PARAMETERS}
-_KEYS = ("cells", "effects", "fixed", "parameters", "schedules")
+_KEYS = ("cells", "scheme", "pv_step", "effects", "fixed", "parameters", "schedules")
+_SCHEMES = ("tvd", "upwind")
+#: default output PV step of the forward runs (fine against the 0.02 PV transducer, 0.05 PV tubes)
+DEFAULT_PV_STEP = 0.01
 _MAX_CELLS = 2000
 
 #: The thesis's reduced calibration space (Table 3.2) on the default model, cells = 60 (the default base of
@@ -120,13 +125,16 @@ def _parameter(label: str, spec) -> CalibratedParameter:
 
 @dataclass(frozen=True)
 class BaseModel:
-    """Calibrated parameters, fixed parameters, base effect strengths (all effects), grid cells, schedules."""
+    """Calibrated parameters, fixed parameters, base effect strengths (all effects), grid cells, schedules, and
+    the numerics of every forward run (transport ``scheme``, output step ``pv_step``)."""
 
     parameters: tuple[CalibratedParameter, ...]
     fixed: dict[str, float] = field(default_factory=dict)
     effects: dict[str, float] = field(default_factory=dict)
     cells: int = 60
     schedules: dict[str, object] = field(default_factory=dict)
+    scheme: str = "tvd"
+    pv_step: float = DEFAULT_PV_STEP
 
     @classmethod
     def from_mapping(cls, config: Mapping) -> BaseModel:
@@ -139,6 +147,12 @@ class BaseModel:
         cells = config.get("cells", 60)
         if isinstance(cells, bool) or not isinstance(cells, int) or not 4 <= cells <= _MAX_CELLS:
             raise ParameterError(f"base model 'cells' must be an integer in [4, {_MAX_CELLS}], got {cells!r}")
+        scheme = config.get("scheme", "tvd")
+        if scheme not in _SCHEMES:
+            raise ParameterError(f"base model 'scheme' must be one of {list(_SCHEMES)}, got {scheme!r}")
+        pv_step = _number("base model 'pv_step'", config.get("pv_step", DEFAULT_PV_STEP))
+        if not 1e-4 <= pv_step <= 0.1:
+            raise ParameterError(f"base model 'pv_step' must be in [0.0001, 0.1] PV, got {pv_step!r}")
         spec = config.get("parameters", {})
         if not isinstance(spec, Mapping) or not spec:
             raise ParameterError("base model [parameters] must list at least one calibrated parameter "
@@ -160,7 +174,8 @@ class BaseModel:
                 as_schedule(sched)
             except ValueError as exc:
                 raise ParameterError(f"base model [schedules] {name!r}: {exc}") from None
-        return cls(parameters, {k: float(v) for k, v in fixed.items()}, effects, int(cells), schedules)
+        return cls(parameters, {k: float(v) for k, v in fixed.items()}, effects, int(cells), schedules, scheme,
+                   pv_step)
 
     # -- the unit box --------------------------------------------------------------------------------------------
     @property

@@ -76,6 +76,14 @@ def main(args: argparse.Namespace) -> int:
                                              if result["ambiguity_set"] else ""))
     for effect in result["effects"]:
         print(f"  effect {effect['name']}: fitted strength {effect['strength']:.4g}")
+    if result["verdict"] in ("unattributed", "out_of_catalogue"):
+        print(f"  the gap is real (chi2 {result['fit']['chi2_base']} on {result['fit']['dof']:g} dof) but not "
+              "attributable to a catalogued mechanism; where: "
+              + (", ".join(f"{c['variable']}:{c['experiment']}:{c['slug']}" for c in result["gap_cells"][:5])
+                 or "no single cell"))
+    tried = result["tried_not_declared"]
+    if tried:
+        print("  tried, not declared: " + ", ".join(f"{t['name']} ({t['strength']:.3g})" for t in tried))
     closed = result["gap_closed"]
     print(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}")
     print(f"wrote {out / 'gap_report.nc'}, {out / 'summary.json'} and {len(figures)} figures", file=sys.stderr)

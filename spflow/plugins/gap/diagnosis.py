@@ -4,7 +4,10 @@
 :mod:`~spflow.plugins.gap.report` turns that into the gap-report Dataset and ``summary.json``, and
 :mod:`~spflow.plugins.gap.figures` draws it.
 
-1. **Calibrate** the base model on the calibration experiments (:mod:`~spflow.plugins.gap.base_calibration`).
+1. **Calibrate** the base model on the calibration experiments (:mod:`~spflow.plugins.gap.base_calibration`),
+   measure its own numerical error at the calibrated point (other resolutions and schemes) and add it to the error
+   model of every block (:mod:`~spflow.plugins.gap.numerical_error`), then recalibrate (warm start). Fit the
+   generic-discrepancy competitor (:mod:`~spflow.plugins.gap.discrepancy`).
 2. **Where** — whitened residuals per QoI x slug cell, Ljung-Box whiteness, signature predictive checks, ranked gap
    cells (:mod:`~spflow.plugins.gap.localisation`, :mod:`~spflow.plugins.gap.signatures`), mean-shift change points
    inside slugs (:mod:`~spflow.plugins.gap.change_points`) and residual/input cross-correlations
@@ -24,7 +27,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.stats import chi2
@@ -35,18 +38,21 @@ from .base_calibration import calibrate_base
 from .base_model import BaseModel
 from .candidates import fingerprint_columns, refit, shortlist
 from .catalogue import CandidateEffect, candidates_for
+from .discrepancy import Discrepancy, fit_discrepancy
 from .change_points import ChangePoint, change_points
 from .fingerprints import NuisanceProjector, ScreenResult, screen
 from .input_correlation import InputCorrelation, input_correlations
 from .layout import Layout, make_layout
-from .least_squares import Fit
+from .least_squares import Fit, WhitenedProblem, fit
 from .localisation import Cell, cells, gap_cells, ljung_box
-from .observed import Experiment, load_experiments
+from .numerical_error import DEFAULT_VARIANTS, NumericalSpread, Numerics, inflate, numerical_spread
+from .observed import MEASURABLE, Experiment, load_experiments
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
 from .psis_loo import compare_loo, psis_loo
 from .quantification import gap_closed, parameter_covariance, predictive_std, raw_jacobian
 from .signatures import predictive_pvalues, signatures
+from .subsets import SearchResult, SubsetFit, best_subset, subset_key
 from .verdict import CandidateScore, Rule, ambiguity_set, verdict
 
 __all__ = ["Options", "GapDiagnosis", "ModelView", "Step", "diagnose"]
@@ -75,6 +81,10 @@ class Options:
     min_segment: int = 3
     null_draws: int = 20000
     loo_draws: int = 2000
+    numerical_variants: tuple[Numerics, ...] = DEFAULT_VARIANTS
+    numerical_window: int = 3
+    discrepancy_degree: int = 2
+    subset_pool: int = 4
 
 
 @dataclass
@@ -138,6 +148,15 @@ class GapDiagnosis:
     gap_cells: list[Cell]
     wall_time_s: float
     forward_runs: int
+    chi2_measurement_only: float = float("nan")
+    numerical: NumericalSpread | None = None
+    discrepancy: Discrepancy | None = None
+    out_of_sample_discrepancy: Predictive | None = None
+    search: SearchResult | None = None
+    search_pool: list[str] = field(default_factory=list)
+    search_runs: int = 0
+    tried: dict[str, float] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def dof(self) -> int:
@@ -185,6 +204,28 @@ def _label(fitted: Fit) -> str:
     return "+".join(["base"] + [c.name for c in fitted.candidates])
 
 
+def _slug_names(experiments: Sequence[Experiment]) -> dict[str, list[str]]:
+    return {e.name: [slug.name for slug in e.schedule.slugs] for e in experiments}
+
+
+def _strength_z(f: Fit, tau: float) -> dict[str, float]:
+    """z of every freed strength against its base strength (linearised posterior sd in the unit box)."""
+    cov = parameter_covariance(f.jacobian, tau)
+    return {c.name: float((f.z[f.n_params + j] - c.unit(c.base)) / np.sqrt(cov[f.n_params + j, f.n_params + j]))
+            for j, c in enumerate(f.candidates)}
+
+
+def _recalibrate(predictor: Predictor, layout: Layout, start: Fit, options: Options, polish: bool) -> Fit:
+    """The base model on a re-weighted ``layout`` from ``start`` (a warm refit, or only the residuals and
+    Jacobian there when the given parameter set is not to be polished)."""
+    if polish:  # (keeps the original start: candidate refits restart from it, not from the re-weighted optimum)
+        return replace(fit(predictor, layout, [start.z], max_nfev=options.max_nfev, diff_step=options.diff_step),
+                       start=start.start)
+    problem = WhitenedProblem(predictor, layout, (), start.n_params, options.diff_step)
+    return Fit(start.z, (), start.n_params, problem.fun(start.z), problem.jac(start.z), 0, start.message,
+               start.start)
+
+
 def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogue: Sequence[str] | None = None,
              options: Options | None = None, *, parallel=None, parameter_sets: np.ndarray | None = None,
              polish: bool = True, log: Callable[[str], None] | None = None) -> GapDiagnosis:
@@ -192,6 +233,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     candidates on ``heldout`` (or leave-one-slug-out when empty). See the module docstring."""
     options = options or Options()
     say = log or (lambda msg: None)
+    notes: list[str] = []
     start = time.perf_counter()
     if not calibration:
         raise ParameterError("a diagnosis needs at least one calibration coreflood")
@@ -211,9 +253,30 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         raise ParameterError(f"{layout_fit.size} calibration points cannot calibrate {len(base.parameters)} "
                              "parameters")
     layout_held = make_layout(held, options.variables)
-    layout_all = make_layout(cal + held)
+    layout_all = make_layout(cal + held, report_only=[v for v in MEASURABLE if v not in options.variables],
+                             dropped=notes)
+    for note in notes:
+        say(note)
     kind = "heldout" if layout_held.size else "leave_one_slug_out"
+    slug_names = _slug_names(cal + held)
+
+    say(f"calibrating the base model on {', '.join(e.name for e in cal)} ({layout_fit.size} points)")
+    base_fit = calibrate_base(predictor, layout_fit, starts=options.starts, seed=options.seed,
+                              max_nfev=options.max_nfev, diff_step=options.diff_step,
+                              parameter_sets=parameter_sets, polish=polish)
+    chi2_measurement = base_fit.chi2
+    numerical = None
+    if options.numerical_variants:
+        numerical = numerical_spread(predictor, base_fit, options.numerical_variants, options.numerical_window)
+        layout_fit, layout_held, layout_all = (inflate(x, numerical.series)
+                                               for x in (layout_fit, layout_held, layout_all))
+        say(f"numerical error of the base model ({'; '.join(numerical.variants)}) added to the error model: "
+            f"chi2 {chi2_measurement:.1f} with measurement error only")
+        base_fit = _recalibrate(predictor, layout_fit, base_fit, options, polish or parameter_sets is None)
     layout_score = layout_held if layout_held.size else layout_fit
+    dof = layout_fit.size - len(base.parameters)
+    pvalue = float(chi2.sf(base_fit.chi2, dof))
+    say(f"base chi2 = {base_fit.chi2:.1f} on {dof} dof (p = {pvalue:.3g}); {predictor.runs} forward runs")
 
     def out_of_sample(f: Fit) -> Predictive:
         if layout_held.size:
@@ -221,14 +284,28 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         return leave_one_slug_out(predictor, layout_fit, f, tau=options.nuisance_scale, max_nfev=options.loso_nfev,
                                   diff_step=options.diff_step)
 
-    say(f"calibrating the base model on {', '.join(e.name for e in cal)} ({layout_fit.size} points)")
-    base_fit = calibrate_base(predictor, layout_fit, starts=options.starts, seed=options.seed,
-                              max_nfev=options.max_nfev, diff_step=options.diff_step,
-                              parameter_sets=parameter_sets, polish=polish)
-    dof = layout_fit.size - len(base.parameters)
-    pvalue = float(chi2.sf(base_fit.chi2, dof))
-    say(f"base chi2 = {base_fit.chi2:.1f} on {dof} dof (p = {pvalue:.3g}); {predictor.runs} forward runs")
     w_base = out_of_sample(base_fit)
+    # the generic-discrepancy competitor: fitted on the calibration data, its transferable part predicts held-out
+    y_base = layout_fit.vector(predictor.predict([base_fit.point], layout_fit.experiments, layout_fit.variables)[0])
+    disc = fit_discrepancy(layout_fit, y_base - layout_fit.observed(), slug_names, options.discrepancy_degree)
+    w_disc = None
+    if layout_held.size:
+        w_disc = predictive(predictor, layout_held, base_fit, options.nuisance_scale, options.diff_step,
+                            shift=disc.shift(layout_held, slug_names))
+        say(f"discrepancy competitor: calibration chi2 {disc.chi2:.1f} ({disc.n_terms} terms), held-out "
+            f"dELPD over the base {compare(w_disc, w_base)[0]:.1f}")
+    competitors = [w_disc] if w_disc is not None else []
+
+    def score(c: CandidateEffect, f: Fit, w: Predictive, w_ref: Predictive, reference_chi2: float,
+              physical: bool) -> CandidateScore:
+        delta, se, se_pointwise = compare(w, w_ref)
+        cd, cse = compare(w, w_disc)[:2] if w_disc is not None else (float("nan"), float("nan"))
+        white = w.whitened[np.isfinite(w.whitened)]
+        dispersion = max(1.0, float(np.mean(white**2))) if white.size else 1.0
+        return CandidateScore(c.name, delta, se, se_pointwise, f.strengths[c.name],
+                              _strength_z(f, options.nuisance_scale)[c.name], physical,
+                              gap_closed(base_fit.chi2, f.chi2, dof), reference_chi2 - f.chi2, w.gradient, cd, cse,
+                              dispersion)
 
     # ``reference``: the last accepted model (what a candidate must beat out of sample); ``fitting``: the model the
     # next candidates are added to -- the reference, or a provisional first effect when no single effect passes
@@ -249,19 +326,14 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             f = refit(predictor, layout_fit, fitting, c, base_fit.start[: base_fit.n_params],
                       max_nfev=options.max_nfev, diff_step=options.diff_step)
             w = out_of_sample(f)
-            delta, se, se_pointwise = compare(w, w_ref)
             strengths = f.strengths
             physical = all(x.is_physical(strengths[x.name]) for x in f.candidates if x.name not in
                            {n for names in accepted for n in names})
-            sd = np.sqrt(parameter_covariance(f.jacobian, options.nuisance_scale)[-1, -1])
-            strength_z = (f.z[-1] - c.unit(c.base)) / sd
             step.fits[c.name], step.out_of_sample[c.name] = f, w
             loo = psis_loo(f, options.nuisance_scale, options.loo_draws, options.seed)
             k = loo.pareto_k[np.isfinite(loo.pareto_k)]
             step.loo[c.name] = (*compare_loo(loo, loo_ref), float(k.max()) if k.size else float("nan"))
-            step.scores[c.name] = CandidateScore(c.name, delta, se, se_pointwise, strengths[c.name], strength_z,
-                                                 physical, gap_closed(base_fit.chi2, f.chi2, dof),
-                                                 fitting.chi2 - f.chi2, w.gradient)
+            step.scores[c.name] = score(c, f, w, w_ref, fitting.chi2, physical)
         steps.append(step)
         # nothing is accepted without a significant calibration gap (verdict.py: gains only out of sample)
         chosen_set = ambiguity_set(list(step.scores.values()), options.rule) if pvalue < options.alpha else []
@@ -285,10 +357,67 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         remaining = [c for c in remaining if c.name != provisional]
     accepted = [[n for n in names if n == names[0] or all(n not in later for later in accepted[k + 1:])]
                 for k, names in enumerate(accepted)]  # an effect accepted later is no longer ambiguous
+
+    # joint search over the shortlisted pool when the greedy path found fewer than two effects and left a
+    # significant calibration gap (subsets.py; the failure mode of compensating effects -- with two or more effects
+    # found greedily the search is skipped: its joint refits would cost several times the whole diagnosis)
+    search, pool, search_runs = None, [], 0
+    gap_left = chi2.sf(reference.chi2, dof - len(reference.candidates)) < options.alpha
+    if pvalue < options.alpha and gap_left and len(accepted) < 2 and options.max_effects >= 2 and steps:
+        first = steps[0]
+        ranked = sorted(first.scores, key=lambda n: -first.scores[n].delta_elpd)
+        z = dict(zip(first.screen.names, first.screen.best_z()))
+        ranked += sorted((n for n in z if n not in ranked), key=lambda n: -abs(z[n]))
+        pool = list(dict.fromkeys([n for names in accepted for n in names[:1]] + ranked))[: options.subset_pool]
+        by_name = {c.name: c for c in candidates}
+        fits: dict[tuple[str, ...], Fit] = {(): base_fit}
+        fits.update({(n,): f for n, f in first.fits.items()})
+        outs: dict[tuple[str, ...], Predictive] = {(): w_base}
+        outs.update({(n,): w for n, w in first.out_of_sample.items()})
+        before = predictor.runs
+
+        def evaluate(names: tuple[str, ...]) -> SubsetFit:
+            if names not in fits:
+                effects = tuple(by_name[n] for n in names)
+                single = [fits[(n,)].z[-1] if (n,) in fits else by_name[n].unit(by_name[n].levels[0]) for n in names]
+                starts = [np.concatenate((base_fit.z, single))]
+                for k, n in enumerate(names):  # the best sub-fit, with the missing effect at its single strength
+                    sub = tuple(m for m in names if m != n)
+                    if sub in fits and len(sub) > 1:
+                        starts.append(np.insert(fits[sub].z, base_fit.n_params + k, single[k]))
+                        break
+                say(f"joint refit base+{'+'.join(names)}")
+                fits[names] = fit(predictor, layout_fit, starts, effects, max_nfev=options.max_nfev,
+                                  diff_step=options.diff_step)
+            f = fits[names]
+            if names not in outs:
+                outs[names] = out_of_sample(f)
+            return SubsetFit(names, f.chi2, f.strengths, _strength_z(f, options.nuisance_scale),
+                             {c.name: c.is_physical(f.strengths[c.name]) for c in f.candidates}, outs[names])
+
+        search = best_subset(pool, evaluate, options.rule, options.max_effects, competitors)
+        search_runs = predictor.runs - before
+        say(f"subset search over {pool}: {len(search.fits)} subsets, admissible {search.admissible}, chosen "
+            f"{list(search.chosen)} ({search_runs} forward runs)")
+        current = subset_key(c.name for c in reference.candidates)
+        if search.chosen and (not accepted or outs[search.chosen].total > outs.get(current, w_ref).total):
+            order = sorted(search.chosen, key=lambda n: -(first.scores[n].delta_elpd if n in first.scores
+                                                          else -np.inf))
+            partners = accepted[0][1:] if accepted and accepted[0][0] == order[0] else []
+            accepted = [[order[0]] + [p for p in partners if p not in order]] + [[n] for n in order[1:]]
+            reference = fits[search.chosen]
+            w_ref = outs[search.chosen]
+
     final_closed = gap_closed(base_fit.chi2, reference.chi2, dof)
-    unconfirmed = [] if accepted else [s.name for s in sorted(steps[0].scores.values(), key=lambda s: -s.delta_elpd)
-                                       if s.physical and s.gap_closed >= options.rule.closed_fraction]
-    decided, ambiguity = verdict(accepted, pvalue < options.alpha, final_closed, unconfirmed, options.rule)
+    closers = [] if accepted else [s.name for s in sorted(steps[0].scores.values(), key=lambda s: -s.delta_elpd)
+                                   if s.physical and s.gap_closed >= options.rule.closed_fraction]
+    decided, ambiguity = verdict(accepted, pvalue < options.alpha, final_closed, closers, options.rule)
+    declared = decided in ("effect", "ambiguous")
+    if not declared:
+        reference, w_ref = base_fit, w_base  # nothing declared: the final model is the base
+    # refitted candidates outside the final model, at their single-effect strengths ("tried, not declared")
+    tried = {name: sc.strength for step in reversed(steps) for name, sc in step.scores.items()
+             if name not in reference.strengths}
     say(f"verdict: {decided} {ambiguity}")
 
     rng = np.random.default_rng(options.seed)
@@ -296,8 +425,10 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     base_view = _view(base_fit, predictor, layout_all, everything, options, rng)
     final_view = base_view if reference is base_fit else _view(reference, predictor, layout_all, everything, options,
                                                                 rng)
+    runs = predictor.runs + (numerical.runs if numerical is not None else 0)
     return GapDiagnosis(options, base, cal, held, candidates, layout_fit, layout_score, layout_all, kind, base_fit,
                         pvalue, pvalue < options.alpha, steps, accepted, decided, ambiguity, reference,
                         _label(reference), w_base, w_ref, base_view, final_view,
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
-                        time.perf_counter() - start, predictor.runs)
+                        time.perf_counter() - start, runs, chi2_measurement, numerical, disc, w_disc, search, pool,
+                        search_runs, tried, notes)

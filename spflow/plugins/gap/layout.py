@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from spflow.core.errors import ParameterError
+
 from .error_model import BlockErrorModel, block_error_model
 from .observed import Experiment
 
@@ -84,8 +86,14 @@ class Layout:
                             and (variables is None or b.variable in variables)))
 
 
-def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | None = None) -> Layout:
-    """Blocks of every measured variable (or only ``variables``) of every experiment, experiments first."""
+def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | None = None, *,
+                report_only: Sequence[str] = (), dropped: list[str] | None = None) -> Layout:
+    """Blocks of every measured variable (or only ``variables``) of every experiment, experiments first.
+
+    A block whose error model is degenerate (e.g. an all-zero effluent assay of a species never injected: no
+    noise scale can weight its misfit) raises ``ParameterError`` naming the variable, experiment and file, unless
+    its variable is in ``report_only`` (shown in reports, not in any likelihood): then it is left out and a note
+    saying so is appended to ``dropped``."""
     blocks = []
     for exp in experiments:
         for variable, series in exp.observed.items():
@@ -93,6 +101,14 @@ def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | No
                 continue
             index = np.flatnonzero(np.isfinite(series))
             pv = exp.pv[index]
-            blocks.append(Block(variable, exp.name, index, pv, series[index], exp.slug_index(pv),
-                                block_error_model(variable, exp, series[index])))
+            try:
+                noise = block_error_model(variable, exp, series[index])
+            except ParameterError as exc:
+                where = f"variable {variable!r} of experiment {exp.name!r} ({exp.source})"
+                if variable not in report_only:
+                    raise ParameterError(f"{where}: {exc}") from None
+                if dropped is not None:
+                    dropped.append(f"{where} left out of the report (not in the likelihood): {exc}")
+                continue
+            blocks.append(Block(variable, exp.name, index, pv, series[index], exp.slug_index(pv), noise))
     return Layout(tuple(blocks))

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 import xarray as xr
@@ -46,6 +46,7 @@ class Experiment:
     observed: dict[str, np.ndarray]
     pore_volume_ml: float | None
     ooip_ml: float | None
+    source: str = "in-memory coreflood"
 
     def slug_ends(self) -> np.ndarray:
         """Cumulative injected PV at the end of each slug."""
@@ -106,7 +107,10 @@ def load_experiments(sources: Sequence, pv_step: float, schedules: Mapping[str, 
                 ds = load_coreflood(source)
             except (ValueError, OSError) as exc:
                 raise ParameterError(f"coreflood {source!r}: {exc}") from None
-        out.append(_experiment(ds, pv_step, schedules or {}))
+        exp = _experiment(ds, pv_step, schedules or {})
+        # the file the data came from: the source given, else the file a loaded Dataset was read from
+        origin = ds.encoding.get("source") if isinstance(source, xr.Dataset) else str(source)
+        out.append(replace(exp, source=str(origin)) if origin else exp)
     names = [e.name for e in out]
     if len(set(names)) != len(names):
         raise ParameterError(f"experiments must have distinct names (attr 'experiment'), got {names}")

@@ -24,14 +24,10 @@ from spflow.plugins.forward.simulate import simulate
 from spflow.plugins.observations import on_simulator_grid
 from spflow.synthetic import NoiseModel, measure
 
-from .base_model import BaseModel
+from .base_model import DEFAULT_PV_STEP, BaseModel
 from .observed import Experiment
 
 __all__ = ["measured_run", "Predictor"]
-
-#: PV step of the forward runs under the measurement chain (fine against the 0.02 PV transducer, 0.05 PV tubes)
-FINE_PV_STEP = 0.01
-
 
 def _deterministic(noise: NoiseModel) -> NoiseModel:
     """The measurement model without its random errors (sampling, offset, drift and dead volume kept)."""
@@ -41,12 +37,13 @@ def _deterministic(noise: NoiseModel) -> NoiseModel:
                             dead_volume_ml=noise.dead_volume_ml)
 
 
-def measured_run(exp: Experiment, params: Mapping[str, float], effects: Mapping[str, float],
-                 cells: int) -> xr.Dataset | None:
-    """The noise-free lab measurement (coreflood format) of a forward run of ``exp``; ``None`` if the run fails."""
+def measured_run(exp: Experiment, params: Mapping[str, float], effects: Mapping[str, float], cells: int,
+                 scheme: str = "tvd", pv_step: float = DEFAULT_PV_STEP) -> xr.Dataset | None:
+    """The noise-free lab measurement (coreflood format) of a forward run of ``exp`` on ``cells`` cells with the
+    transport ``scheme`` and output step ``pv_step`` (at most the data's grid step); ``None`` if the run fails."""
     try:
-        sim = simulate(exp.schedule, {**exp.core, **params}, cells=cells, effects=dict(effects),
-                       pv_step=min(FINE_PV_STEP, exp.pv_step))
+        sim = simulate(exp.schedule, {**exp.core, **params}, cells=cells, effects=dict(effects), scheme=scheme,
+                       pv_step=min(pv_step, exp.pv_step))
     except SimulationError:
         return None
     return measure(sim, _deterministic(exp.measurement), 0, experiment=exp.name, source="spflow gap prediction",
@@ -96,12 +93,13 @@ class Predictor:
                     todo[key] = (self.experiments[name], params, effects)
         if todo:
             args = list(todo.values())
+            numerics = (self.base.cells, self.base.scheme, self.base.pv_step)
             if self.parallel is not None and len(args) > 1:
                 from joblib import delayed
 
-                results = self.parallel(delayed(measured_run)(e, p, s, self.base.cells) for e, p, s in args)
+                results = self.parallel(delayed(measured_run)(e, p, s, *numerics) for e, p, s in args)
             else:
-                results = [measured_run(e, p, s, self.base.cells) for e, p, s in args]
+                results = [measured_run(e, p, s, *numerics) for e, p, s in args]
             self._runs.update(zip(todo, results))
             self.runs += len(args)
         out = []

@@ -60,9 +60,12 @@ def _terms(w: np.ndarray, a: np.ndarray, cov: np.ndarray) -> Predictive:
 
 
 def predictive(predictor: Predictor, layout: Layout, fitted: Fit, tau: float = 0.5, h: float = 0.01,
-               rows: np.ndarray | None = None) -> Predictive:
-    """Predictive terms of the points of ``layout`` (or of its ``rows``) under ``fitted`` (module docstring)."""
+               rows: np.ndarray | None = None, shift: np.ndarray | None = None) -> Predictive:
+    """Predictive terms of the points of ``layout`` (or of its ``rows``) under ``fitted`` (module docstring), its
+    mean moved by ``shift`` (raw units; a transferred discrepancy) when given."""
     y, jac = raw_jacobian(predictor, layout, fitted, h)
+    if shift is not None:
+        y = y + shift
     w = layout.whiten(y - layout.observed())
     a = layout.whiten(jac)
     keep = np.ones(layout.size, bool) if rows is None else rows

@@ -19,7 +19,12 @@ Dataset layout (every variable has ``units``; mixed-unit tables name their units
   ``delta_elpd`` (+ SEs), ``delta_elpd_loo`` (+ SE, ``pareto_k_max``; PSIS-LOO on the calibration data, reported
   only), ``gap_closed``, ``passes``; ``fingerprint_cos`` of the first step;
 * ``param`` table: ``theta`` per model and ``shift_fraction``;
-* scalars and attrs: chi^2, p-value, gap-closed fractions, coverage, ELPD, the verdict and the ambiguity set.
+* scalars and attrs: chi^2, p-value, gap-closed fractions, coverage, ELPD, the verdict and the ambiguity set;
+  ``effects`` holds the *declared* effects only (verdict ``effect`` / ``ambiguous``), ``tried_not_declared`` every
+  other refitted candidate with its single-effect strength; ``numerical_error`` (variants, forward runs, chi^2
+  with measurement error only, RMS spread per block), ``discrepancy`` (the competitor's terms, calibration chi^2,
+  held-out dELPD over the base), ``search`` (pool, subsets fitted, admissible, chosen, forward runs) and
+  ``notes`` (blocks left out of the report) as JSON.
 
 :func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
 """
@@ -293,10 +298,31 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
                               {"units": "1", "long_name": "parameter shift / range"})
     data.update(_scalars(g))
     final_strengths = g.final_fit.strengths
+    search = None
+    if g.search is not None:
+        search = {"pool": g.search_pool, "subsets_fitted": [list(k) for k in g.search.fits if k],
+                  "admissible": [list(k) for k in g.search.admissible], "chosen": list(g.search.chosen),
+                  "forward_runs": g.search_runs}
+    numerical = None
+    if g.numerical is not None:
+        numerical = {"variants": g.numerical.variants, "forward_runs": g.numerical.runs,
+                     "chi2_base_measurement_only": g.chi2_measurement_only,
+                     "rms": {f"{v}:{e}": x for (v, e), x in g.numerical.rms(g.layout_all).items()}}
+    discrepancy = None
+    if g.discrepancy is not None:
+        discrepancy = {"terms": g.discrepancy.n_terms, "chi2_calibration": g.discrepancy.chi2,
+                       "gap_closed_calibration": gap_closed(g.base_fit.chi2, g.discrepancy.chi2, g.dof),
+                       "delta_elpd_heldout": None if g.out_of_sample_discrepancy is None else
+                       float(np.sum(g.out_of_sample_discrepancy.lpd - g.out_of_sample_base.lpd))}
     attrs = {
         "verdict": g.verdict,
         "ambiguity_set": json.dumps(g.ambiguity),
         "effects": json.dumps([{"name": k, "strength": v} for k, v in final_strengths.items()]),
+        "tried_not_declared": json.dumps([{"name": k, "strength": v} for k, v in g.tried.items()]),
+        "search": json.dumps(search),
+        "numerical_error": json.dumps(numerical),
+        "discrepancy": json.dumps(discrepancy),
+        "notes": json.dumps(g.notes),
         "accepted_steps": json.dumps(g.accepted),
         "final_model": g.final_label,
         "score_kind": g.score_kind,
@@ -370,7 +396,12 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
         "ambiguity_set": json.loads(r.attrs["ambiguity_set"]),
         "heldout_only": [str(n) for j, n in enumerate(r["candidate"].values) if r["passes"][0, j]]
         if r.attrs["verdict"] == "none" else [],
+        "tried_not_declared": json.loads(r.attrs.get("tried_not_declared", "[]")),
         "accepted_steps": json.loads(r.attrs["accepted_steps"]),
+        "search": json.loads(r.attrs.get("search", "null")),
+        "numerical_error": json.loads(r.attrs.get("numerical_error", "null")),
+        "discrepancy": json.loads(r.attrs.get("discrepancy", "null")),
+        "notes": json.loads(r.attrs.get("notes", "[]")),
         "final_model": r.attrs["final_model"],
         "score": r.attrs["score_kind"],
         "ranked_effects": ranked,

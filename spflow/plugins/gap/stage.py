@@ -27,6 +27,7 @@ from .base_calibration import parameter_set_starts
 from .base_model import TABLE_3_2_BASE, BaseModel
 from .catalogue import candidates_for
 from .diagnosis import Options, diagnose
+from .numerical_error import DEFAULT_VARIANTS
 from .observed import MEASURABLE
 from .report import report_dataset
 from .verdict import Rule
@@ -57,7 +58,15 @@ OPTION_PARAMS = {
                      doc="grid step (a multiple of the transducer interval keeps the AR(1) model exact)"),
     "alpha": Param(float, 0.01, bounds=(1e-6, 0.5), doc="significance level of the calibration-gap test and cells"),
     "shortlist": Param(int, 3, bounds=(1, 20), doc="candidates refitted per step (plus ambiguity partners)"),
-    "max_effects": Param(int, 2, bounds=(1, 5), doc="effects added greedily at most"),
+    "max_effects": Param(int, 2, bounds=(1, 5),
+                         doc="effects in the final model at most (greedy and joint search; 3 finds three "
+                             "coexisting effects)"),
+    "subset_pool": Param(int, 4, bounds=(1, 8),
+                         doc="shortlisted effects whose subsets (up to max_effects) are refitted jointly"),
+    "numerical_error": Param(bool, True, doc="add the base model's own numerical error (2x cells; 2x cells "
+                                             "upwind) to the error model"),
+    "discrepancy_degree": Param(int, 2, bounds=(0, 6),
+                                doc="degree of the per-slug Legendre discrepancy competitor"),
     "max_nfev": Param(int, 30, bounds=(2, 1000), doc="least-squares iterations per fit"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
     "nuisance_scale": Param(float, 0.5, bounds=(1e-3, 1e3),
@@ -77,13 +86,16 @@ def options_from(values: dict) -> Options:
     decision rule is the chi^2_1 quantile at ``alpha``)."""
     rule = Rule(values["min_delta"], values["se_factor"], values["closed_fraction"],
                 float(chi2.isf(values["alpha"], 1)))
-    keep = {k: v for k, v in values.items() if k not in ("min_delta", "se_factor", "closed_fraction")}
-    return Options(**(keep | {"variables": tuple(values["variables"]), "rule": rule}))
+    keep = {k: v for k, v in values.items()
+            if k not in ("min_delta", "se_factor", "closed_fraction", "numerical_error")}
+    variants = DEFAULT_VARIANTS if values.get("numerical_error", True) else ()
+    return Options(**(keep | {"variables": tuple(values["variables"]), "rule": rule,
+                              "numerical_variants": variants}))
 
 
 class Diagnose(Stage):
     name = "diagnose"
-    version = "3"
+    version = "4"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
@@ -114,9 +126,11 @@ class Diagnose(Stage):
                 out = []
                 for source in sources:
                     try:
-                        out.append(load_coreflood(source))
+                        ds = load_coreflood(source)
                     except (ValueError, OSError) as exc:
                         raise ParameterError(f"stage 'diagnose' parameter {which!r}: {source!r}: {exc}") from None
+                    ds.encoding["source"] = str(source)  # named in messages about this coreflood's data
+                    out.append(ds)
                 return out
 
             self._data = (load(self.params["calibration"], "calibration"), load(self.params["heldout"], "heldout"))

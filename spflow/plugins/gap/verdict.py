@@ -16,21 +16,36 @@ contains the reference at the base strength; ``min_chi2_drop`` is the chi^2_1 qu
 top of a first one whose fit left some misfit. (An effect that is off in the base model can only be added with
 ``s >= 0``, so the sign test of the notes is the physical range.)
 
-Among passing candidates the **ambiguity set** is every candidate whose gain is within ``se_factor`` standard
-errors of the best one's, with the measurement SE of their difference
-(:mod:`~spflow.plugins.gap.predictive_scores`). One member is an ``effect``, several are ``ambiguous`` (an effect
-accepted in a later greedy step is no longer ambiguous with the first one: the answer is "both"). The pointwise SE
-of ``loo_compare`` was tried for the set and rejected: it put a candidate that closed 0.1 % of the bundled data's
-calibration gap in one set with the one that closed 54 %, because for localised gaps that SE is of the order of
-the gains themselves, and on the twins it never brought a missing true effect into a set. Effects are added
-greedily: a second one must pass the same test on top of the first.
+**Competitors** (issue 20). With held-out data, a candidate must also beat the generic-discrepancy competitor
+(:mod:`~spflow.plugins.gap.discrepancy`: a smooth per-slug discrepancy fitted on the calibration data,
+transferred as its per-slug-type mean) by the same margins, ``dELPD_k - dELPD_disc > min_delta`` and
+``> se_factor * SE``; the other competitor, the simulator's own numerical error, is inside every model's
+covariance (:mod:`~spflow.plugins.gap.numerical_error`). A candidate that closes the calibration gap but does not
+beat them is *tried, not declared*.
 
-The final verdict needs a significant calibration gap for anything but ``none``:
+**Over-dispersion.** The measurement SE assumes the model is right up to measurement noise. Where a model leaves
+held-out misfit far above the noise (whitened mean square ``phi = chi^2 / n > 1``), every SE of its comparisons
+is multiplied by ``sqrt(phi)`` (the quasi-likelihood dispersion correction): two wrong models whose scores differ
+by a few percent of thousands of nats are not told apart by noise-sized SEs.
 
-* ``effect`` / ``ambiguous`` — at least one step passed and the final model closes at least ``closed_fraction``
-  (half) of the calibration gap;
-* ``ambiguous`` also when nothing passes out of sample but some physical candidates close half of the
-  calibration gap (the set is those candidates: unconfirmed);
+The **ambiguity set** is the best passing candidate plus every physical candidate whose gain is within
+``se_factor`` (dispersion-corrected) standard errors of the best one's, with the measurement SE of their
+difference (:mod:`~spflow.plugins.gap.predictive_scores`), whether or not it passes on its own: candidates whose
+scores are not separated beyond the SE are one set. One member is an ``effect``, several are ``ambiguous`` (an
+effect accepted in a later step is no longer ambiguous with the first one: the answer is "both"). The pointwise
+SE of ``loo_compare`` was tried for the set and rejected: it put a candidate that closed 0.1 % of the bundled
+data's calibration gap in one set with the one that closed 54 %, because for localised gaps that SE is of the
+order of the gains themselves. Several effects are searched for jointly (:mod:`~spflow.plugins.gap.subsets`):
+every member of the final set must pass the same test against the set without it.
+
+The final verdict needs a significant calibration gap (with the numerical error in the covariance) for anything
+but ``none``:
+
+* ``effect`` / ``ambiguous`` — a set passed (against the base, the discrepancy competitor and, per member,
+  the set without it) and the final model closes at least ``closed_fraction`` (half) of the calibration gap;
+* ``unattributed`` — the gap is real, physical candidates close half of it on the calibration data, but none
+  predicts the held-out coreflood better than the base and the competitors: not attributable to a catalogued
+  mechanism (the report shows the gap's size and where it is; the candidates are "tried, not declared");
 * ``out_of_catalogue`` — a calibration gap that no candidate (or accepted combination) closes by half;
 * ``none`` — no significant calibration gap. Gains that show only out of sample are reported, not declared: a
   base model calibrated on few corefloods has several parameter optima that fit them equally well and predict
@@ -45,7 +60,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Rule", "CandidateScore", "passes", "ambiguity_set", "verdict"]
+__all__ = ["Rule", "CandidateScore", "significant", "passes", "ambiguity_set", "verdict", "VERDICTS"]
+
+#: every verdict a diagnosis can return
+VERDICTS = ("none", "effect", "ambiguous", "unattributed", "out_of_catalogue")
 
 
 @dataclass(frozen=True)
@@ -73,38 +91,53 @@ class CandidateScore:
     gap_closed: float
     chi2_drop: float
     gradient: np.ndarray
+    competitor_delta: float = float("nan")
+    competitor_se: float = float("nan")
+    dispersion: float = 1.0
+
+
+def significant(delta: float, se: float, dispersion: float, rule: Rule) -> bool:
+    """``delta > min_delta`` and ``delta > se_factor * sqrt(dispersion) * se`` (module docstring)."""
+    return bool(np.isfinite(delta) and delta > rule.min_delta
+                and delta > rule.se_factor * np.sqrt(max(dispersion, 1.0)) * se)
 
 
 def passes(score: CandidateScore, rule: Rule) -> bool:
-    d = score.delta_elpd
-    return bool(np.isfinite(d) and d > rule.min_delta and d > rule.se_factor * score.se and score.physical
-                and abs(score.strength_z) > rule.se_factor and score.chi2_drop > rule.min_chi2_drop)
+    """The decision rule for one candidate against its reference (and the competitor, when scored)."""
+    beats_competitor = (not np.isfinite(score.competitor_se)
+                        or significant(score.competitor_delta, score.competitor_se, score.dispersion, rule))
+    return bool(significant(score.delta_elpd, score.se, score.dispersion, rule) and beats_competitor
+                and score.physical and abs(score.strength_z) > rule.se_factor
+                and score.chi2_drop > rule.min_chi2_drop)
 
 
 def ambiguity_set(scores: Sequence[CandidateScore], rule: Rule) -> list[CandidateScore]:
-    """Passing candidates within ``se_factor`` SE of the best passing one (best first); empty if none pass."""
+    """The best passing candidate and every physical candidate within ``se_factor`` (dispersion-corrected) SE of
+    it (best first); empty if none passes."""
     passing = sorted((s for s in scores if passes(s, rule)), key=lambda s: -s.delta_elpd)
     if not passing:
         return []
     best = passing[0]
     out = [best]
-    for s in passing[1:]:
+    for s in sorted(scores, key=lambda s: -s.delta_elpd):
+        if s is best or not s.physical or not np.isfinite(s.delta_elpd):
+            continue
         ok = np.isfinite(best.gradient) & np.isfinite(s.gradient)
         se = float(np.linalg.norm(best.gradient[ok] - s.gradient[ok]))
-        if best.delta_elpd - s.delta_elpd <= rule.se_factor * se:
+        if best.delta_elpd - s.delta_elpd <= rule.se_factor * np.sqrt(max(best.dispersion, s.dispersion, 1.0)) * se:
             out.append(s)
     return out
 
 
 def verdict(steps: Sequence[Sequence[str]], gap_significant: bool, final_closed: float,
-            unconfirmed: Sequence[str], rule: Rule) -> tuple[str, list[str]]:
-    """(verdict, ambiguity set) from the accepted greedy steps (each step's ambiguity set, best first), whether the
+            closers: Sequence[str], rule: Rule) -> tuple[str, list[str]]:
+    """(verdict, ambiguity set) from the accepted steps (each step's ambiguity set, best first), whether the
     calibration gap is significant, the gap fraction closed by the final model, and the physical candidates that
-    close half the calibration gap without passing out of sample."""
+    close half the calibration gap without passing out of sample (module docstring)."""
     if not gap_significant:
         return "none", []
     if steps:
         if not final_closed >= rule.closed_fraction:
             return "out_of_catalogue", []
         return ("ambiguous" if any(len(s) > 1 for s in steps) else "effect"), list(steps[0])
-    return ("ambiguous", list(unconfirmed)) if unconfirmed else ("out_of_catalogue", [])
+    return ("unattributed", []) if closers else ("out_of_catalogue", [])
