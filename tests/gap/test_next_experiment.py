@@ -313,3 +313,39 @@ def test_rank_designs_rejects_bad_input(toy):
         "a": False, "b": False}
     with pytest.raises(ParameterError, match="covariance"):
         Hypothesis("c", fits["viscosity"], np.eye(3))
+
+
+# -- after a diagnosis: the ambiguity set's refits -> the proposal files (spflow diagnose) -------------------------
+
+
+def test_competing_fits_take_the_last_step_that_refitted_every_member():
+    from types import SimpleNamespace
+
+    from spflow.plugins.gap.next_after_diagnosis import competing_fits
+
+    steps = [SimpleNamespace(fits={"a": 1, "b": 2, "c": 3}), SimpleNamespace(fits={"a": 10, "c": 30})]
+    assert competing_fits(SimpleNamespace(ambiguity=["a", "b"], steps=steps)) == {"a": 1, "b": 2}
+    assert competing_fits(SimpleNamespace(ambiguity=["a", "c"], steps=steps)) == {"a": 10, "c": 30}
+    assert competing_fits(SimpleNamespace(ambiguity=["a"], steps=steps)) == {}  # nothing to separate
+
+
+def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
+    """An ambiguous verdict between the toy's two hypotheses: the proposal is a rate step (the only design the
+    physics lets separate them), written as a schedule file, a rationale and a study experiment that loads."""
+    from types import SimpleNamespace
+
+    import spflow.plugins.gap.next_after_diagnosis as nad
+    from spflow.plugins.gap.diagnosis import Options
+
+    exp, fits, _, _, bases = toy
+    # the toy's hypotheses differ by their base model (the diagnosis's by their candidate effect): pass the bases
+    monkeypatch.setattr(nad, "hypotheses_from_fits", lambda f: hypotheses_from_fits(f, bases=bases))
+    diag = SimpleNamespace(ambiguity=["shear_thinning", "viscosity"], steps=[SimpleNamespace(fits=fits)],
+                           calibration=[exp], base=bases["viscosity"], options=Options(variables=("dp", "oil_cut")))
+    proposal = nad.propose_next_experiment(diag, tmp_path)
+    assert proposal.summary["kind"] == "rate_step" and proposal.summary["worst_accuracy"] > 0.95
+    assert read_schedule_file(proposal.files["schedule"]) == as_schedule(proposal.summary["schedule"])
+    assert any("next experiment" in line and "rate" in line for line in proposal.lines())
+    # the predict-role study experiment names the schedule file (its loading: test_proposal_as_a_study_experiment)
+    text = proposal.files["study_experiment"].read_text()
+    assert 'role = "predict"' in text and f'schedule = "{proposal.files["schedule"].name}"' in text

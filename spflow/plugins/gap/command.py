@@ -8,7 +8,9 @@ TOML file: the base model (``cells``, ``[effects]``, ``[fixed]``, ``[parameters]
 :mod:`spflow.plugins.gap.base_model`), optionally ``catalogue = [...]`` and a ``[diagnosis]`` table with any of
 the ``diagnose`` stage's options (``variables``, ``pv_step``, ``alpha``, ``shortlist``, ``max_effects``,
 ``max_nfev``, ``starts``, ...). ``--catalogue`` (comma-separated effect names) overrides the file's. Writes
-``gap_report.nc``, ``summary.json`` and the figures into ``DIR`` (default ``out/diagnose``).
+``gap_report.nc``, ``summary.json`` and the figures into ``DIR`` (default ``out/diagnose``); when the verdict leaves
+two or more candidates in its ambiguity set, also the proposed next coreflood (``next_experiment.toml``, ``.json``,
+``next_experiment_study.toml``; :mod:`~spflow.plugins.gap.next_after_diagnosis`), unless ``--no-next-experiment``.
 """
 
 from __future__ import annotations
@@ -36,6 +38,8 @@ def add_parser(sub) -> None:
     p.add_argument("--catalogue", metavar="NAMES", help="comma-separated candidate effects (default: all)")
     p.add_argument("--out", default=str(Path("out") / "diagnose"), metavar="DIR")
     p.add_argument("--jobs", type=int, default=1, metavar="N", help="parallel forward runs")
+    p.add_argument("--no-next-experiment", dest="next_experiment", action="store_false",
+                   help="do not rank and propose the coreflood that best separates an ambiguous verdict's candidates")
 
 
 def _config(path: str) -> dict:
@@ -52,7 +56,8 @@ def _config(path: str) -> dict:
 def main(args: argparse.Namespace) -> int:
     """Run the diagnosis of ``args`` (from :func:`add_parser`), write the report, print the verdict."""
     from .figures import write_figures
-    from .report import summary
+    from .next_after_diagnosis import propose_next_experiment
+    from .report import report_dataset, summary
     from .stage import OPTION_PARAMS, Diagnose
 
     config = _config(args.base)
@@ -65,7 +70,9 @@ def main(args: argparse.Namespace) -> int:
         raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
     stage = Diagnose(calibration=list(args.observations), heldout=list(args.heldout), base=config,
                      catalogue=catalogue, **options)
-    report = stage.run(StageContext("diagnose", n_jobs=args.jobs))
+    ctx = StageContext("diagnose", n_jobs=args.jobs)
+    diag = stage.diagnosis(ctx)
+    report = report_dataset(diag)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     report.to_netcdf(out / "gap_report.nc")
@@ -86,5 +93,10 @@ def main(args: argparse.Namespace) -> int:
         print("  tried, not declared: " + ", ".join(f"{t['name']} ({t['strength']:.3g})" for t in tried))
     closed = result["gap_closed"]
     print(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}")
+    if args.next_experiment:
+        proposal = propose_next_experiment(diag, out, parallel=ctx.parallel() if args.jobs > 1 else None)
+        for line in proposal.lines() if proposal else ["next experiment: none proposed (no ambiguity set of two or "
+                                                        "more candidates to separate)"]:
+            print(line)
     print(f"wrote {out / 'gap_report.nc'}, {out / 'summary.json'} and {len(figures)} figures", file=sys.stderr)
     return 0

@@ -30,7 +30,7 @@ from .layout import make_layout
 from .least_squares import model_point
 from .next_experiment import Hypothesis
 from .observed import Experiment, load_experiments
-from .prediction import FINE_PV_STEP, Predictor
+from .prediction import Predictor
 from .predictive_scores import compare, predictive
 
 __all__ = ["realised_accuracy"]
@@ -65,7 +65,7 @@ def realised_accuracy(table: xr.Dataset, hypotheses: Sequence[Hypothesis], base:
                 rng.multivariate_normal(truth.fit.z, truth.covariance, method="eigh"), 0.0, 1.0)
             params, effects = Predictor(own, []).model(*model_point(z, truth.fit.n_params, truth.fit.candidates))
             lab = make_coreflood(schedule, {**reference.core, **params}, effects=effects, noise=reference.measurement,
-                                 seed=first_seed + k, cells=own.cells, pv_step=FINE_PV_STEP, experiment="design")
+                                 seed=first_seed + k, cells=own.cells, pv_step=own.pv_step, experiment="design")
             [exp] = load_experiments([lab], reference.pv_step)
             layout = make_layout([exp], variables)
             scores = [predictive(Predictor(h.base or base, [exp]), layout, h.fit, tau, diff_step) for h in hypotheses]

@@ -26,7 +26,7 @@ from spflow.plugins.forward.numba_cache import source_digest
 from .base_calibration import parameter_set_starts
 from .base_model import TABLE_3_2_BASE, BaseModel
 from .catalogue import candidates_for
-from .diagnosis import Options, diagnose
+from .diagnosis import GapDiagnosis, Options, diagnose
 from .numerical_error import DEFAULT_VARIANTS
 from .observed import MEASURABLE
 from .report import report_dataset
@@ -140,6 +140,10 @@ class Diagnose(Stage):
         return canonical_hash(self._load())
 
     def run(self, ctx: StageContext, calibrated: xr.Dataset | None = None) -> xr.Dataset:
+        return report_dataset(self.diagnosis(ctx, calibrated))
+
+    def diagnosis(self, ctx: StageContext, calibrated: xr.Dataset | None = None) -> GapDiagnosis:
+        """The whole :class:`~spflow.plugins.gap.diagnosis.GapDiagnosis` (``run`` returns its report Dataset)."""
         cal, held = self._load()
         sets = None if calibrated is None else parameter_set_starts(self.base_model, calibrated)
 
@@ -150,4 +154,4 @@ class Diagnose(Stage):
         result = diagnose(cal, held, self.base_model, self.catalogue, self.options,
                           parallel=ctx.parallel() if ctx.n_jobs > 1 else None, parameter_sets=sets,
                           polish=self.params["polish"], log=log)
-        return report_dataset(result)
+        return result

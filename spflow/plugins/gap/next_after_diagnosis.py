@@ -1,0 +1,80 @@
+"""The next experiment after a diagnosis (issue 20, item 3): when the verdict leaves candidates that the data do not
+tell apart, rank lab-runnable corefloods by how well they would separate them and write the best one out.
+
+The competing hypotheses are the diagnosis's own refits of the members of its final ambiguity set (the last step
+that refitted them: "reference + effect", each with the linearised covariance of its calibration); the reference
+coreflood, whose core, rate and measurement chain the new coreflood keeps, is the first calibration coreflood. The
+ranking is :func:`~spflow.plugins.gap.next_experiment.rank_designs` over
+:func:`~spflow.plugins.gap.design_space.design_space` (slug sizes and concentrations, a salinity change, a long
+post-flush, per-slug injection-rate steps); ``docs/next_experiment.md`` has the method.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import xarray as xr
+
+from spflow.study.proposed_experiment import study_experiment_toml
+
+from .diagnosis import GapDiagnosis
+from .next_experiment import hypotheses_from_fits, rank_designs
+from .proposal import proposal_summary, write_proposal
+
+__all__ = ["NextExperiment", "competing_fits", "propose_next_experiment"]
+
+
+@dataclass(frozen=True)
+class NextExperiment:
+    """The ranked designs, the best one's rationale and the files written for it."""
+
+    table: xr.Dataset
+    summary: dict
+    files: dict[str, Path]
+
+    def lines(self) -> list[str]:
+        """What ``spflow diagnose`` prints about the proposal."""
+        s = self.summary
+        accuracy = ", ".join(f"{k} {v:.2f}" for k, v in s["accuracy"].items() if v is not None)
+        out = [f"next experiment (separates {', '.join(s['hypotheses'])}): {s['label']} ({s['kind']}, "
+               f"{s['total_pv']:.3g} PV)",
+               f"  predicted decision accuracy if each is true: {accuracy}; worst expected log predictive ratio "
+               f"{s['worst_expected_log_ratio_nat']:.3g} nat"]
+        out += [f"  runner-up: {r['label']} (worst accuracy {r['worst_accuracy']:.2f})" for r in s["runners_up"][:2]
+                if r["worst_accuracy"] is not None]
+        out += [f"  wrote {path}" for path in self.files.values()]
+        return out
+
+
+def competing_fits(diag: GapDiagnosis) -> dict:
+    """The refits of the final ambiguity set's members (name -> Fit), from the last step that refitted them all;
+    empty when fewer than two candidates remain."""
+    names = list(diag.ambiguity)
+    if len(names) < 2:
+        return {}
+    for step in reversed(diag.steps):
+        if all(n in step.fits for n in names):
+            return {n: step.fits[n] for n in names}
+    return {}
+
+
+def propose_next_experiment(diag: GapDiagnosis, directory, *, parallel=None, log=None) -> NextExperiment | None:
+    """Rank the next corefloods for ``diag``'s ambiguity set and write the best one into ``directory``:
+    ``next_experiment.toml`` (schedule file), ``next_experiment.json`` (rationale) and
+    ``next_experiment_study.toml`` (a predict-role study experiment on the reference core). ``None`` when the
+    verdict leaves nothing to separate."""
+    fits = competing_fits(diag)
+    if not fits:
+        return None
+    reference = diag.calibration[0]
+    variables = [v for v in diag.options.variables if v in reference.observed]
+    table = rank_designs(hypotheses_from_fits(fits), diag.base, reference, variables=variables,
+                         min_delta=diag.options.rule.min_delta, se_factor=diag.options.rule.se_factor,
+                         parallel=parallel, log=log)
+    files = write_proposal(table, directory)
+    text, _ = study_experiment_toml("next_experiment", files["schedule"].name, reference.core,
+                                    reference.measurement, reference.name)
+    files["study_experiment"] = Path(directory) / "next_experiment_study.toml"
+    files["study_experiment"].write_text(text + "\n", encoding="utf-8")
+    return NextExperiment(table, proposal_summary(table), files)
