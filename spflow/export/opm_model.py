@@ -14,7 +14,8 @@ with :func:`~spflow.export.opm_deck.write_opm_deck`:
 3. explicit ``schedule`` and ``effects``.
 
 A later layer overrides an earlier one and the override is recorded with both sources; two parameter sets giving
-the same parameter is a clash and raises :class:`~spflow.core.errors.ParameterError` naming both. Everything is
+the same parameter is a clash and raises :class:`~spflow.core.errors.ParameterError` naming both. A calibration or
+posterior whose parameters are not the study's ``[parameters.calibrated]`` is noted (``NOTE`` lines). Everything is
 checked before the deck is written. Every value taken is printed through ``log`` with its source and written into
 the deck's header as comments (:attr:`ModelSources.lines`); parameters no layer gives take the forward model's
 defaults, named in one line.
@@ -36,6 +37,8 @@ from spflow.plugins.forward import effects as E
 from spflow.plugins.forward.parameters import PARAMETERS
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.study import Study, load_study
+
+from .opm_deck import OpmDeck, write_opm_deck
 
 __all__ = ["ModelSources", "export_opm", "load_parameter_file", "calibration_parameters", "posterior_parameters",
            "resolve_model"]
@@ -61,6 +64,7 @@ class ModelSources:
     effects: dict[str, float] = field(default_factory=dict)
     effect_source: dict[str, str] = field(default_factory=dict)
     overrides: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     def set_params(self, values: Mapping[str, float], source: str, *, clash_with: tuple[str, ...] = ()) -> None:
         """Take ``values`` from ``source``. A name already taken from one of the ``clash_with`` sources raises a
@@ -90,7 +94,7 @@ class ModelSources:
 
     def lines(self) -> list[str]:
         """Text lines: the schedule, every parameter and effect with its source, the overrides, the defaults."""
-        out = [f"schedule {getattr(self.schedule, 'name', self.schedule)!r} from {self.schedule_source}"]
+        out = [f"schedule {self.schedule.name!r} from {self.schedule_source}"]
         out += [f"parameter {n} = {v:.10g}{_unit(n)} from {self.param_source[n]}" for n, v in self.params.items()]
         defaults = [n for n in _SPECS if n not in self.params]
         out.append(f"parameters at the forward model's defaults ({len(defaults)}, `spflow list params`): "
@@ -102,6 +106,7 @@ class ModelSources:
             out.append("effects at the registry's default strengths: "
                        + ", ".join(f"{n} = {registry[n]:g}" for n in rest))
         out += [f"OVERRIDE {o}" for o in self.overrides]
+        out += [f"NOTE {n}" for n in self.notes]
         return out
 
 
@@ -132,7 +137,7 @@ def load_parameter_file(path, what: str = "--params") -> tuple[dict, dict]:
     return dict(data), {}
 
 
-def _dataset(source, what: str, needs: tuple[str, ...]) -> tuple[xr.Dataset, str]:
+def _dataset(source, what: str, needs: tuple[str, ...], stages: str) -> tuple[xr.Dataset, str]:
     if isinstance(source, xr.Dataset):
         ds, where = source, f"{what} (Dataset)"
     else:
@@ -146,8 +151,8 @@ def _dataset(source, what: str, needs: tuple[str, ...]) -> tuple[xr.Dataset, str
             raise ParameterError(f"{where}: not a readable netCDF file ({exc})") from None
     missing = [v for v in needs if v not in ds.variables]
     if missing:
-        raise ParameterError(f"{where}: no variable(s) {missing}; expected the output of the {what.lstrip('-')} "
-                             f"stage with {list(needs)}")
+        raise ParameterError(f"{where}: no variable(s) {missing}; expected the output of {stages} with "
+                             f"{list(needs)}")
     return ds, where
 
 
@@ -174,7 +179,8 @@ def calibration_parameters(calibration, study=None) -> tuple[dict[str, float], s
     """The noise-consistent best point of an ``nsga2_calibration`` result (Dataset or netCDF file): the
     ``confidence_best`` design (minimum χ² under the lab's measurement-error model). Returns the parameters and a
     description of the source."""
-    ds, where = _dataset(calibration, "--calibration", ("confidence_best", "param"))
+    ds, where = _dataset(calibration, "--calibration", ("confidence_best", "param"),
+                         "the nsga2_calibration stage (version 3 or later; rerun the node for an older file)")
     chi2 = ds.attrs.get("confidence_chi2_min")
     detail = "confidence_best, the minimum-chi2 design" + ("" if chi2 is None else f" (chi2 = {float(chi2):.6g})")
     return _named(ds["param"].values, ds["confidence_best"].values.astype(float), where, study), f"{where} {detail}"
@@ -184,7 +190,7 @@ def posterior_parameters(posterior, draw, study=None) -> tuple[dict[str, float],
     """A posterior sample of an MCMC stage's result (Dataset or netCDF file): ``draw`` = an index into the
     chain-major flattened draws (chain ``draw // n_draw``, draw ``draw % n_draw``), or ``"mean"``, the posterior
     mean over every chain and draw. Returns the parameters and a description of the source."""
-    ds, where = _dataset(posterior, "--posterior", ("theta", "param"))
+    ds, where = _dataset(posterior, "--posterior", ("theta", "param"), "an MCMC stage (emcee_sampler, mh_sampler)")
     theta = ds["theta"].transpose("chain", "draw", "param").values.astype(float)
     n_chain, n_draw = theta.shape[:2]
     flat = theta.reshape(-1, theta.shape[-1])
@@ -200,6 +206,20 @@ def posterior_parameters(posterior, draw, study=None) -> tuple[dict[str, float],
                                  f" ({n_chain} chains x {n_draw} draws, chain-major)")
         values, detail = flat[k], f"draw {k} (chain {k // n_draw}, draw {k % n_draw})"
     return _named(ds["param"].values, values, where, study), f"{where} {detail}"
+
+
+def _space_mismatch(values: Mapping[str, float], study, source: str) -> list[str]:
+    """Notes when a calibration's parameters are not the study's ``[parameters.calibrated]`` (a calibration of
+    another study, e.g. a built-in pipeline's run on the bundled corefloods)."""
+    calibrated = [n for spec in study.parameter_space.values() for n in spec["names"]]
+    extra, missing = [n for n in values if n not in calibrated], [n for n in calibrated if n not in values]
+    notes = []
+    if extra:
+        notes.append(f"{source} sets {extra}, which the study does not calibrate")
+    if missing:
+        notes.append(f"the study calibrates {missing}, which {source} does not give: they keep the study's or "
+                     "the model's values above")
+    return notes
 
 
 def resolve_model(*, study=None, experiment: str | None = None, schedule=None, params=None, effects=None,
@@ -224,7 +244,11 @@ def resolve_model(*, study=None, experiment: str | None = None, schedule=None, p
         m.schedule, m.schedule_source = exp.schedule, f"study {where} experiment {experiment!r}"
         m.set_params(study.fixed, f"study {where} [parameters.fixed]")
         m.set_params(exp.model_params(), f"study {where} experiment {experiment!r}")
-        m.set_effects(study.effects, f"study {where} [effects]")
+        defaulted = {d.field.removeprefix("effects.") for d in study.defaults_taken
+                     if d.experiment is None and d.field.startswith("effects.")}
+        m.set_effects({k: v for k, v in study.effects.items() if k not in defaulted}, f"study {where} [effects]")
+        m.set_effects({k: v for k, v in study.effects.items() if k in defaulted},
+                      f"the registry's default (not listed in [effects] of study {where})")
     if schedule is not None:
         source = "--schedule"
         if isinstance(schedule, (str, Path)) and Path(schedule).suffix.lower() in (".toml", ".json"):
@@ -254,18 +278,18 @@ def resolve_model(*, study=None, experiment: str | None = None, schedule=None, p
         if given is not None:
             values, source = reader()
             m.set_params(values, source, clash_with=tuple(sets))
+            if study is not None:
+                m.notes += _space_mismatch(values, study, source)
     if effects:
         m.set_effects(effects, "--effect")
     return m
 
 
 def export_opm(out_dir, *, study=None, experiment: str | None = None, schedule=None, params=None, effects=None,
-               calibration=None, posterior=None, draw=None, cells: int = 100, log=print, **deck_options):
+               calibration=None, posterior=None, draw=None, cells: int = 100, log=print, **deck_options) -> OpmDeck:
     """Write ``out_dir/CORE.DATA``, the OPM Flow deck of a study's experiment and/or an explicit schedule under a
     parameter set (module docstring); every value taken is printed through ``log`` and written into the deck
-    header. ``deck_options`` go to :func:`~spflow.export.opm_deck.write_opm_deck`. Returns its ``OpmDeck``."""
-    from .opm_deck import write_opm_deck
-
+    header. ``deck_options`` go to :func:`~spflow.export.opm_deck.write_opm_deck`."""
     model = resolve_model(study=study, experiment=experiment, schedule=schedule, params=params, effects=effects,
                           calibration=calibration, posterior=posterior, draw=draw)
     lines = model.lines()

@@ -194,7 +194,22 @@ def test_python_function_and_missing_inputs(study, capsys):
         export_opm(study / "x", study=study / "study.toml")
     with pytest.raises(ParameterError, match="no schedule"):
         export_opm(study / "x", params={"AP1": 25.0})
-    with pytest.raises(ParameterError, match="confidence_best"):
+    with pytest.raises(ParameterError, match="not both"):
+        export_opm(study / "x", study=study / "study.toml", experiment="poly1", calibration=study / "c.nc",
+                   posterior=study / "p.nc", draw=1)
+    with pytest.raises(ParameterError, match="confidence_best.*version 3"):
         xr.Dataset({"designs": (("pareto", "param"), np.ones((1, 1)))}, coords={"param": ["AP1"]}).to_netcdf(
             study / "old.nc")
         export_opm(study / "x", study=study / "study.toml", experiment="poly1", calibration=study / "old.nc")
+
+
+def test_a_calibration_of_other_parameters_is_noted(study):
+    xr.Dataset({"confidence_best": ("param", [30.0, 0.05])},
+               coords={"param": ["AP1", "HBNC70"]}).to_netcdf(study / "other.nc")
+    printed = []
+    export_opm(study / "other", study=study / "study.toml", experiment="poly1", calibration=study / "other.nc",
+               cells=CELLS, log=printed.append)
+    notes = [ln for ln in printed if ln.startswith("NOTE")]
+    assert len(notes) == 2
+    assert "['HBNC70']" in notes[0] and "does not calibrate" in notes[0]
+    assert "['AP3']" in notes[1] and "other.nc" in notes[1]
