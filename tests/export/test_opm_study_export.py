@@ -6,6 +6,8 @@ Flory-Huggins multiplier, Eqs. 2.1-2.3), not through the exporter.
 """
 
 import math
+import os
+import shutil
 
 import numpy as np
 import pytest
@@ -14,6 +16,9 @@ import xarray as xr
 from spflow.cli import main
 from spflow.core.errors import ParameterError
 from spflow.export import export_opm
+from spflow.export.opm_run import OpmRunError, run_opm
+from spflow.plugins.forward.simulate import simulate
+from spflow.study import load_study
 from spflow.synthetic import make_coreflood
 
 from .deck_text import expand, keyword_records, table
@@ -213,3 +218,43 @@ def test_a_calibration_of_other_parameters_is_noted(study):
     assert len(notes) == 2
     assert "['HBNC70']" in notes[0] and "does not calibrate" in notes[0]
     assert "['AP3']" in notes[1] and "other.nc" in notes[1]
+
+
+# --- the calibrated deck in OPM Flow -------------------------------------------------------------------------------
+
+needs_flow = pytest.mark.skipif(shutil.which("flow") is None,
+                                reason="OPM Flow ('flow') is not on PATH: apt-get install libopm-simulators-bin")
+#: the oleic Corey exponent of the quick history match's best point (docs/opm.md); with OPM's default 20 Newton
+#: iterations it shuts the injector of this flood in the waterflood
+E2WC = 2.14
+
+
+@needs_flow
+def test_a_calibrated_corey_exponent_runs_in_opm_flow(study):
+    """Issue 21's acceptance at 100 cells, first-order spflow: recovery at the end within 0.005, Δp at every slug's
+    end within 2 %."""
+    deck = export_opm(study / "e2wc", study=study / "study.toml", experiment="poly1", params={"E2WC": E2WC},
+                      cells=100, log=lambda line: None)
+    opm = run_opm(deck)
+    ref = simulate(deck.schedule, deck.params, cells=100, effects=load_study(study / "study.toml").effects,
+                   scheme="upwind", pv_step=0.01)
+    assert abs(float(opm.recovery[-1]) - float(ref.recovery[-1])) <= 0.005
+    for end in np.cumsum([s["pv"] for s in SLUGS]):
+        i = int(np.argmin(np.abs(opm.pv.values - end)))
+        assert abs(opm.pv.values[i] - end) < 1e-4
+        assert opm.dp.values[i] == pytest.approx(np.interp(opm.pv.values[i], ref.pv.values, ref.dp.values), rel=0.02)
+
+
+@needs_flow
+def test_a_well_opm_flow_shuts_is_an_error(study, tmp_path, monkeypatch):
+    """The same deck with OPM's default 20 Newton iterations (a wrapper around the real ``flow``) shuts the
+    injector; the run is refused instead of returning the shut well's pressures."""
+    wrapper = tmp_path / "flow"
+    wrapper.write_text(f'#!/bin/bash\nexec {shutil.which("flow")} '
+                       '"${@/--newton-max-iterations=40/--newton-max-iterations=20}"\n')
+    wrapper.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path}:{os.environ['PATH']}")
+    deck = export_opm(study / "e2wc_shut", study=study / "study.toml", experiment="poly1", params={"E2WC": E2WC},
+                      cells=100, log=lambda line: None)
+    with pytest.raises(OpmRunError, match="shut a well.*INJ"):
+        run_opm(deck)
