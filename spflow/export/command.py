@@ -1,21 +1,25 @@
 """``spflow export opm`` and ``spflow compare opm``: the OPM Flow bridge from the command line.
 
-    spflow export opm --schedule SCHEDULE [--params FILE] [--effect NAME=VALUE ...] --out DIR [--cells N]
-                      [--pv-step PV] [--area-scale X] [--rock-density KG_M3] [--shear-sw SW] [--approximate]
+    spflow export opm [--study FILE --experiment NAME] [--schedule SCHEDULE] [--params FILE]
+                      [--calibration FILE.nc | --posterior FILE.nc --draw K|mean] [--effect NAME=VALUE ...]
+                      --out DIR [--cells N] [--pv-step PV] [--area-scale X] [--rock-density KG_M3] [--shear-sw SW]
+                      [--approximate]
     spflow compare opm (the same options) [--scheme upwind|tvd]
 
-``SCHEDULE`` is a Table 2.5 name (``BCF1``..) or a TOML/JSON file ``{name = ..., slugs = [{pv, salinity_ppm,
-polymer_ppm, ...}, ...]}``. ``--params`` is a TOML/JSON file with the forward-model parameters: a flat table
-``{NAME = value}`` (the defaults, a calibration's best point, a posterior sample) or with ``[parameters]`` and
-``[effects]`` tables; ``--effect`` overrides effect strengths. ``export`` writes ``DIR/CORE.DATA``; ``compare``
-also runs OPM Flow and spflow and writes ``opm.nc``, ``spflow.nc``, ``comparison.csv`` and ``comparison.png``.
+``--study``/``--experiment`` take the experiment's core, rate (and per-slug rates), schedule, fluids, the study's
+fixed parameters and its base-model effects. ``SCHEDULE`` is a Table 2.5 name (``BCF1``..) or a TOML/JSON file
+``{name = ..., slugs = [{pv, salinity_ppm, polymer_ppm, ...}, ...]}``; it overrides the experiment's. ``--params`` is
+a TOML/JSON file with forward-model parameters: a flat table ``{NAME = value}`` or with ``[parameters]`` and
+``[effects]`` tables. ``--calibration`` takes the noise-consistent best point (``confidence_best``) of an
+``nsga2_calibration`` result, ``--posterior`` a draw (chain-major index) or the mean of an MCMC posterior; a parameter
+given by ``--params`` and one of them is refused. ``--effect`` overrides effect strengths. Every value taken is
+printed with its source (:mod:`.opm_model`). ``export`` writes ``DIR/CORE.DATA``; ``compare`` also runs OPM Flow and
+spflow and writes ``opm.nc``, ``spflow.nc``, ``comparison.csv`` and ``comparison.png``.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import tomllib
 from pathlib import Path
 
 from spflow.core.errors import ParameterError
@@ -25,8 +29,15 @@ __all__ = ["add_parser", "main"]
 
 def _common(p) -> None:
     p.add_argument("target", choices=["opm"], help="the simulator (OPM Flow)")
-    p.add_argument("--schedule", required=True, help="Table 2.5 name or a TOML/JSON schedule file")
-    p.add_argument("--params", metavar="FILE", help="TOML/JSON forward-model parameters (default: the defaults)")
+    p.add_argument("--study", metavar="FILE", help="a study file (with --experiment)")
+    p.add_argument("--experiment", metavar="NAME", help="the study's experiment whose core, rate, schedule and "
+                   "fluids are exported")
+    p.add_argument("--schedule", help="Table 2.5 name or a TOML/JSON schedule file (overrides the experiment's)")
+    p.add_argument("--params", metavar="FILE", help="TOML/JSON forward-model parameters")
+    p.add_argument("--calibration", metavar="FILE.nc",
+                   help="an nsga2_calibration result: take its noise-consistent best point (confidence_best)")
+    p.add_argument("--posterior", metavar="FILE.nc", help="an MCMC posterior (emcee_sampler / mh_sampler result)")
+    p.add_argument("--draw", metavar="K|mean", help="the posterior draw (chain-major index) or 'mean'")
     p.add_argument("--effect", action="append", default=[], metavar="NAME=VALUE", help="effect strength override")
     p.add_argument("--out", required=True, metavar="DIR")
     p.add_argument("--cells", type=int, default=100)
@@ -47,35 +58,9 @@ def add_parser(sub) -> None:
     p.add_argument("--scheme", choices=["upwind", "tvd"], default="upwind", help="spflow's scheme (default upwind)")
 
 
-def _load(path: str, what: str) -> dict:
-    file = Path(path)
-    if not file.is_file():
-        raise ParameterError(f"{what} {path!r}: no such file")
-    try:
-        if file.suffix.lower() == ".json":
-            return json.loads(file.read_text())
-        with file.open("rb") as fh:
-            return tomllib.load(fh)
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
-        raise ParameterError(f"{what} {path!r}: not valid {file.suffix.lstrip('.').upper() or 'TOML'}: {exc}") from None
-
-
-def _inputs(args: argparse.Namespace):
-    schedule = args.schedule
-    if Path(schedule).suffix.lower() in (".toml", ".json"):
-        schedule = _load(schedule, "--schedule")
-    params, effects = {}, {}
-    if args.params:
-        data = _load(args.params, "--params")
-        if "parameters" in data or "effects" in data:
-            unknown = sorted(set(data) - {"parameters", "effects"})
-            if unknown:
-                raise ParameterError(f"--params {args.params!r}: unknown table(s) {unknown}; allowed "
-                                     "['parameters', 'effects'] or a flat NAME = value table")
-            params, effects = dict(data.get("parameters", {})), dict(data.get("effects", {}))
-        else:
-            params = dict(data)
-    for item in args.effect:
+def _effects(items: list[str]) -> dict[str, float]:
+    effects = {}
+    for item in items:
         name, sep, value = item.partition("=")
         try:
             effects[name.strip()] = float(value)
@@ -83,25 +68,35 @@ def _inputs(args: argparse.Namespace):
             sep = ""
         if not sep:
             raise ParameterError(f"--effect {item!r}: expected NAME=VALUE with a number, e.g. shear_thinning=0")
-    return schedule, params, effects
+    return effects
+
+
+def _sources(args: argparse.Namespace) -> dict:
+    return {"study": args.study, "experiment": args.experiment, "schedule": args.schedule, "params": args.params,
+            "effects": _effects(args.effect), "calibration": args.calibration, "posterior": args.posterior,
+            "draw": args.draw}
 
 
 def main(args: argparse.Namespace) -> int:
     """Run ``spflow export opm`` or ``spflow compare opm`` (``args.command``)."""
-    schedule, params, effects = _inputs(args)
     out = Path(args.out)
     options = {"area_scale": args.area_scale, "rock_density": args.rock_density, "shear_sw": args.shear_sw}
     if args.command == "export":
-        from .opm_deck import write_opm_deck
+        from .opm_model import export_opm
 
-        deck = write_opm_deck(out / "CORE.DATA", schedule, params, effects, args.cells, approximate=args.approximate,
-                              pv_step=args.pv_step, **options)
+        deck = export_opm(out, cells=args.cells, approximate=args.approximate, pv_step=args.pv_step,
+                          **_sources(args), **options)
         print(f"wrote {deck.path}")
         return 0
     from .opm_compare import compare_opm
+    from .opm_model import resolve_model
 
-    _, _, rows = compare_opm(schedule, params, effects, cells=args.cells, scheme=args.scheme, pv_step=args.pv_step,
-                             out=out, approximate=args.approximate, **options)
+    model = resolve_model(**_sources(args))
+    lines = model.lines()
+    print("\n".join(lines))
+    _, _, rows = compare_opm(model.schedule, model.params, model.effects, cells=args.cells, scheme=args.scheme,
+                             pv_step=args.pv_step, out=out, approximate=args.approximate, provenance=lines,
+                             **options)
     width = max(len(r["quantity"]) for r in rows)
     print(f"{'quantity':<{width}}  {'OPM Flow':>12}  {'spflow':>12}  difference")
     for r in rows:

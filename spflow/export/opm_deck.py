@@ -111,7 +111,7 @@ def _initial_pressure(p, tables, x_m, length_m, rate_ml_min) -> np.ndarray:
 def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, *, approximate: bool = False,
                    area_scale: float | None = None, pv_step: float = 0.01, rock_density: float = 2650.0,
                    swof_nodes: int = 401, polymer_nodes: int = 201, shear_sw: float | None = None,
-                   log=print) -> OpmDeck:
+                   provenance=(), log=print) -> OpmDeck:
     """Write the OPM Flow deck of one coreflood to ``path`` (a ``.DATA`` file; its directory is created).
 
     ``schedule``, ``params`` and ``effects`` are those of :func:`spflow.simulate`. ``area_scale`` multiplies the
@@ -120,7 +120,8 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     Mechanisms OPM cannot express raise :class:`~.opm_mechanisms.OpmExportError` (a ``ParameterError``) naming
     them, unless ``approximate`` -- then each approximation is printed through ``log`` and kept in
     ``OpmDeck.notes``. ``shear_sw`` is the water saturation at which OPM's shear rate is matched to spflow's in a
-    two-phase core (default ``1 - S2RWC``; :mod:`.opm_shear`).
+    two-phase core (default ``1 - S2RWC``; :mod:`.opm_shear`). ``provenance``: text lines (where each value came
+    from, :func:`~spflow.export.opm_model.export_opm`) written into the header as comments.
     """
     if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or not 3 <= cells <= 100000:
         raise ParameterError(f"cells must be an integer in [3, 100000], got {cells!r}")
@@ -182,6 +183,8 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     out = []
     w = out.append
     w(f"-- spflow export of coreflood {sched.name!r} to OPM Flow (METRIC units)\n")
+    for line in provenance:
+        w(f"-- {line}\n")
     for note in notes:
         w(f"-- {note}\n")
     w("RUNSPEC\nTITLE\n  spflow coreflood {}\n".format(sched.name))

@@ -109,6 +109,7 @@ def test_region_projections_equal_the_analytic_ellipsoid():
     centre, half = (region.upper + region.lower) / 2, (region.upper - region.lower) / 2
     np.testing.assert_allclose(half, lg.half, rtol=1e-3)
     np.testing.assert_allclose(centre, lg.gls(y), atol=1e-3 * lg.half.max())
+    np.testing.assert_allclose(region.best, lg.gls(y), atol=1e-3 * lg.half.max())
     assert region.threshold == pytest.approx(lg.q)
     assert region.chi2_min == pytest.approx(lg.chi2_dense(lg.gls(y), y), rel=1e-6)
     assert region.count == 0
@@ -193,6 +194,8 @@ def test_stage_reports_noise_consistent_ranges():
     lo, hi = out["confidence_lower"].values, out["confidence_upper"].values
     assert np.all(out["prior_lower"].values <= lo) and np.all(lo <= hi) and np.all(hi <= out["prior_upper"].values)
     assert out["confidence_lower"].attrs["units"] == out["calibrated_lower"].attrs["units"]
+    best = out["confidence_best"].values
+    assert np.all(lo <= best) and np.all(best <= hi)
 
 
 def test_a_rejected_model_carries_a_warning():
@@ -205,7 +208,7 @@ def test_a_rejected_model_carries_a_warning():
     ds = xr.Dataset(coords={"param": [f"p{i}" for i in range(9)]})
     noise = SimpleNamespace(n_data=11, noise_from_data=True, pairs=[("dp", "BCF1")])
     for chi2_min, flagged in ((5.0, False), (12.0, True)):
-        region = ConfidenceRegion(np.zeros(9), np.ones(9), 3, 0.95, 16.9, chi2_min)
+        region = ConfidenceRegion(np.zeros(9), np.ones(9), 3, 0.95, 16.9, chi2_min, np.full(9, 0.5))
         out = NSGA2Calibration._add_confidence(ds, region, noise, 100)
         assert out.attrs["confidence_fit_pvalue"] == pytest.approx(np.exp(-chi2_min / 2), rel=1e-12)
         assert ("confidence_warning" in out.attrs) == flagged

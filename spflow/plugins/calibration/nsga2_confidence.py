@@ -69,7 +69,8 @@ def whitened_chi2(block_residuals: Iterable[np.ndarray], models: Iterable[BlockE
 
 @dataclass(frozen=True)
 class ConfidenceRegion:
-    """Per-parameter extent (``lower``, ``upper``) of a likelihood-ratio region; ``count`` archive points lie in it."""
+    """Per-parameter extent (``lower``, ``upper``) of a likelihood-ratio region; ``count`` archive points lie in it;
+    ``best`` is the point of the minimum ``chi2_min`` (the polished minimum, or an archive point that is lower)."""
 
     lower: np.ndarray
     upper: np.ndarray
@@ -77,6 +78,7 @@ class ConfidenceRegion:
     level: float
     threshold: float
     chi2_min: float
+    best: np.ndarray
 
 
 #: Forward-difference step of the gradients, in units of the box width.
@@ -128,6 +130,7 @@ def region_extent(chi2: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, u
         if res.fun < best:
             best_u, best = np.clip(res.x, 0.0, 1.0), float(res.fun)
     chi2_min = min(best, float(values.min()))
+    best_x = to_x(best_u) if best <= values.min() else archive[int(np.argmin(values))]
     threshold = float(stats.chi2.ppf(level, df=len(lower)))
     limit = chi2_min + threshold
     inside = (archive - lower) / width
@@ -145,7 +148,7 @@ def region_extent(chi2: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, u
                 ends.append(u[None, :])
     ends = to_x(np.vstack(ends))
     return ConfidenceRegion(ends.min(axis=0), ends.max(axis=0), int(np.sum(values <= limit)), level, threshold,
-                            chi2_min)
+                            chi2_min, best_x)
 
 
 class NoiseMisfit:

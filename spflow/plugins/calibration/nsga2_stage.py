@@ -18,7 +18,9 @@ history (front size, normalised hypervolume, best objectives), the fronts at the
 last one (Fig. 3.10; NaN-padded to the largest front), σ_loss and mean misfits per checkpoint, the calibrated
 ranges (min/max of the Pareto designs) next to the prior bounds (Fig. 3.14), and the noise-consistent ranges
 ``confidence_lower/upper``: the extent of the likelihood-ratio region of level ``confidence_level`` under the
-lab's measurement-error model (``confidence_count`` of the evaluated designs lie inside it)
+lab's measurement-error model (``confidence_count`` of the evaluated designs lie inside it), and
+``confidence_best``, the design of the minimum χ² (the noise-consistent best point, ``spflow export opm
+--calibration``)
 (:mod:`~spflow.plugins.calibration.nsga2_confidence`; attrs ``confidence_*`` give the level, the χ² threshold, the
 minimum χ², the number of data, the archive size and whether the noise model came from the data). Units are in each
 variable's attrs; ``param_unit`` and ``objective_unit`` coordinates give the per-parameter and per-objective units.
@@ -75,6 +77,7 @@ NSGA2_CALIBRATION = DatasetSchema(
         "calibrated_upper": Variable(("param",), units=_PER_PARAM),
         "confidence_lower": Variable(("param",), units=_PER_PARAM),
         "confidence_upper": Variable(("param",), units=_PER_PARAM),
+        "confidence_best": Variable(("param",), units=_PER_PARAM),
         "confidence_count": Variable((), kind="i", units="1"),
     },
     attrs=("training", "generations_run", "stop_reason", "confidence_level", "confidence_threshold",
@@ -93,7 +96,7 @@ def _squared_unit(unit: str) -> str:
 
 class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
-    version = "2"
+    version = "3"
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
     inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
@@ -177,6 +180,7 @@ class NSGA2Calibration(Stage):
         fit_pvalue = float(stats.chi2.sf(region.chi2_min, dof)) if dof > 0 else float("nan")
         ds = ds.assign(confidence_lower=("param", region.lower, per_param),
                        confidence_upper=("param", region.upper, per_param),
+                       confidence_best=("param", region.best, per_param),
                        confidence_count=((), np.int64(region.count), {"units": "1"}))
         ds.attrs.update({
             "confidence_level": region.level,
