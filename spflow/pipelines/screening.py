@@ -48,7 +48,7 @@ def report(result: spflow.RunResult, outdir: Path) -> list[str]:
 
     screening = result["screening"]
     experiment = screening.attrs["experiments"]
-    qois = [f"{q}:{experiment}" for q in qois]
+    qois = [f"{q}:{experiment}" for q in QOIS]
     fig = plot_total_indices(screening, qois, title=f"Fig. 3.2: Sobol' screening on {experiment} "
                                                     f"({screening.attrs['runs']} runs)")
     fig.savefig(outdir / "fig_3_2_sobol_screening.png", dpi=110)

@@ -57,7 +57,8 @@ def add_design_nodes(p: spflow.Pipeline, posterior: str, *, prefix: str = "", ma
     inputs = StudyInputs.of(study)
     flood = inputs.reference_flood()
     model = {"fixed": dict(inputs.study.fixed, **flood.model_params()), "effects": dict(inputs.study.effects),
-             "reference_flood": flood.forward_experiment()["schedule"] if reference == "study" else {}}
+             "reference_flood": dict(flood.forward_experiment()["schedule"], name=flood.name) if reference == "study"
+             else {}}
     for node, drift in DRIFTS.items():
         p.add(prefix + node, "slug_design", inputs={"posterior": posterior},
               params={"drift": drift, "steps_per_year": steps_per_year, "n_init": n_init, "max_iter": max_iter,

@@ -28,6 +28,7 @@ with the same settings comes from the cache. ``--quick`` runs the same DAG with 
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import spflow
@@ -75,10 +76,13 @@ def _proxy_report(result: spflow.RunResult, outdir: Path) -> list[str]:
     pce, pck = result["hm.surrogate"], result["proxy.pck"]
     design, runs = result["proxy.design"], result["proxy.responses"]
     figures.convergence_figure(result["proxy.adaptive"], outdir / "fig_3_3_pce_convergence.png")
+    experiment = str(runs["experiment"].values[0])  # the first training coreflood
     figures.proxy_vs_simulator_figure({"PCE": pce, "PC-Kriging": pck}, design, runs,
-                                      outdir / "fig_3_4_proxy_vs_simulator.png")
-    figures.moments_figure(pce, runs, outdir / "fig_3_8_pce_moments.png")
-    figures.band_figure(pck, design, runs, outdir / "fig_3_15_pck_band.png", reference=pce)
+                                      outdir / "fig_3_4_proxy_vs_simulator.png", experiment=experiment)
+    figures.moments_figure(pce, runs, outdir / "fig_3_8_pce_moments.png", experiment=experiment)
+    schedule = json.loads(json.loads(result["hm.observations"].attrs["coreflood_attrs"])[experiment]["schedule"])
+    figures.band_figure(pck, design, runs, outdir / "fig_3_15_pck_band.png", reference=pce, experiment=experiment,
+                        schedule=schedule)
     lines = [f"{'proxy':6s} {'QoI':10s} {'R2 final':>9s} {'R2 max':>9s} {'median R2 (per PV)':>19s} "
              f"{'mean err':>9s} {'var err':>9s}   (Eq. 3.15, independent LHS runs of the training corefloods)"]
     for kind in ("pce", "pck"):
