@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .error_model import BlockErrorModel, block_error_model
+from .error_model import BlockErrorModel, block_error_model, uninformative
 from .observed import Experiment
 
 __all__ = ["Block", "Layout", "make_layout"]
@@ -85,13 +85,17 @@ class Layout:
 
 
 def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | None = None) -> Layout:
-    """Blocks of every measured variable (or only ``variables``) of every experiment, experiments first."""
+    """Blocks of every measured variable (or only ``variables``) of every experiment, experiments first; an
+    assay of a species the experiment never injects that reads zero throughout is left out (it carries no
+    information, :func:`~spflow.plugins.gap.error_model.uninformative`)."""
     blocks = []
     for exp in experiments:
         for variable, series in exp.observed.items():
             if variables is not None and variable not in variables:
                 continue
             index = np.flatnonzero(np.isfinite(series))
+            if uninformative(variable, exp, series[index]):
+                continue
             pv = exp.pv[index]
             blocks.append(Block(variable, exp.name, index, pv, series[index], exp.slug_index(pv),
                                 block_error_model(variable, exp, series[index])))
