@@ -158,3 +158,18 @@ def test_a_csv_and_a_netcdf_of_the_same_data_give_the_same_diagnosis(tmp_path, m
     for name in nc.data_vars:
         if np.issubdtype(nc[name].dtype, np.floating):
             np.testing.assert_allclose(csv[name].values, nc[name].values, rtol=1e-6, atol=1e-12, err_msg=name)
+
+
+def test_profile_and_study_options_are_checked_against_the_pipeline(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert spflow.cli.main(["status", "history_matching", "--profile", "thesis", "--quick"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1] == "--profile thesis"
+    assert spflow.cli.main(["status", "screening", "--profile", "thesis", "--quick"]) == 2
+    assert "pipeline 'screening' takes no --profile" in capsys.readouterr().err
+    assert spflow.cli.main(["status", "prior_spread", "--study", "nowhere.toml"]) == 2
+    assert "nowhere.toml" in capsys.readouterr().err
+    assert spflow.cli.main(["diagnose", "--base", "x.toml"]) == 2
+    assert "needs --study STUDY, or --observations FILE ... with --base CONFIG" in capsys.readouterr().err
+    assert spflow.cli.main(["diagnose", "--study", "s.toml", "--observations", "BCF1"]) == 2
+    assert "--study gives the corefloods" in capsys.readouterr().err

@@ -59,7 +59,8 @@ def test_workflow_quick_on_a_new_users_study(user_study, capsys):
     assert reference["surfactant_ppm"] == SP[1]["surfactant_ppm"] and reference["s_sp"] == SP[1]["pv"]
     assert reference["polymer_ppm"] == SP[2]["polymer_ppm"] and reference["s_p"] == SP[2]["pv"]
     summary = json.loads((Path("out") / "workflow_quick" / "gap_diagnosis" / "summary.json").read_text())
-    assert {c["experiment"] for c in summary["cells"]} <= {"poly7", "sp8"}
+    assert summary["score"] == "heldout"  # the candidates were scored on the held-out SP flood
+    assert {c["experiment"] for c in summary["gap_cells"]} <= {"poly7", "sp8"}
     pipe = workflow.pipeline(study="study/study.toml", quick=True)
     for node in ("hm.responses", "bc.responses", "screening.screening"):
         params = pipe.nodes[node].params["experiments"][0]["params"]
