@@ -48,13 +48,13 @@ def test_workflow_quick_on_a_new_users_study(user_study, capsys):
     assert "DEFAULT experiment &#x27;sp8&#x27;: fluids.C60 = 0.0097 meq/ml" in html
 
     # every part ran on the user's corefloods, each with its own core (values typed in new_user_data)
-    cal = xr.open_dataset(Path("out") / "workflow_quick" / "history_matching" / "calibration.nc")
+    cal = xr.load_dataset(Path("out") / "workflow_quick" / "history_matching" / "calibration.nc")
     assert cal.attrs["training"] == "poly7" and list(cal["experiment"].values) == ["sp8"]
     assert "undetermined" in cal.attrs and ("undetermined_warning" in cal.attrs) == bool(cal.attrs["undetermined"])
-    bands = xr.open_dataset(Path("out") / "workflow_quick" / "bayesian_calibration" / "predictive.nc")
+    bands = xr.load_dataset(Path("out") / "workflow_quick" / "bayesian_calibration" / "predictive.nc")
     assert list(bands["experiment"].values) == ["poly7", "sp8"]
     assert float(bands["total_pv"].sel(experiment="poly7")) == pytest.approx(sum(s["pv"] for s in POLYMER))
-    slug = xr.open_dataset(Path("out") / "workflow_quick" / "slug_design" / "design_up.nc")
+    slug = xr.load_dataset(Path("out") / "workflow_quick" / "slug_design" / "design_up.nc")
     reference = json.loads(slug.attrs["reference_flood"])
     assert reference["surfactant_ppm"] == SP[1]["surfactant_ppm"] and reference["s_sp"] == SP[1]["pv"]
     assert reference["polymer_ppm"] == SP[2]["polymer_ppm"] and reference["s_p"] == SP[2]["pv"]
