@@ -83,15 +83,15 @@ def _proxy_report(result: spflow.RunResult, outdir: Path) -> list[str]:
     schedule = json.loads(json.loads(result["hm.observations"].attrs["coreflood_attrs"])[experiment]["schedule"])
     figures.band_figure(pck, design, runs, outdir / "fig_3_15_pck_band.png", reference=pce, experiment=experiment,
                         schedule=schedule)
-    lines = [f"{'proxy':6s} {'QoI':10s} {'R2 final':>9s} {'R2 max':>9s} {'median R2 (per PV)':>19s} "
+    lines = [f"{'proxy':6s} {'QoI':18s} {'R2 final':>9s} {'R2 max':>9s} {'median R2 (per PV)':>19s} "
              f"{'mean err':>9s} {'var err':>9s}   (Eq. 3.15, independent LHS runs of the training corefloods)"]
     for kind in ("pce", "pck"):
         val = result[f"proxy.validation_{kind}"]
         for q in range(val.sizes["qoi"]):
             row = val.isel(qoi=q)
-            variable = str(row["qoi_variable"].values)
-            r2 = val["r2"].where(val["output_variable"] == variable).median()
-            lines.append(f"{kind:6s} {variable:10s} {float(row['r2_final']):9.4f} {float(row['r2_max']):9.4f} "
+            variable, exp = str(row["qoi_variable"].values), str(row["qoi_experiment"].values)
+            r2 = val["r2"].where((val["output_variable"] == variable) & (val["output_experiment"] == exp)).median()
+            lines.append(f"{kind:6s} {variable + ':' + exp:18s} {float(row['r2_final']):9.4f} {float(row['r2_max']):9.4f} "
                          f"{float(r2):19.4f} {float(row['mean_l2_error']):9.2e} {float(row['variance_l2_error']):9.2e}")
     return lines
 
