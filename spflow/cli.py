@@ -149,7 +149,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
     stale = [r.node for r in status(pipe, cache=args.cache) if not r.fresh]
     if stale:
         again = ["spflow", "run", args.pipeline, *(["--quick"] if args.quick else []),
-                 *(["--study", args.study] if args.study else []), *(["--profile", args.profile] if args.profile else []),
+                 *(["--study", args.study] if args.study else []),
+                 *(["--profile", args.profile] if args.profile else []),
                  *[word for text in args.set or () for word in ("--set", text)]]
         raise SpflowError(f"{len(stale)} node(s) of {pipe.name!r} are not in the cache ({', '.join(stale[:5])}"
                           f"{', ...' if len(stale) > 5 else ''}); run `{shlex.join(again)}` first")

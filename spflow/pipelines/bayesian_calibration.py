@@ -7,8 +7,9 @@ and the posterior, its ``heldout`` ones are predicted (bundled: BCF1 + BCF2 trai
 
 1. ``space``: the Table 4.1 ranges (uniform prior, Eq. 4.2).
 2. ``design`` (Latin hypercube) -> ``responses`` (simulator on the training corefloods, each with its own core, rate
-   and schedule) -> ``surrogate``: the ``pce`` stage on pressure drop and oil cut of the training corefloods (§4.5). Swap the proxy with ``surrogate="pck"`` (or
-   ``p.set_stage("surrogate", "pck", {...})``): every surrogate stage has the same inputs and output.
+   and schedule) -> ``surrogate``: the ``pce`` stage on pressure drop and oil cut of the training corefloods (§4.5).
+   Swap the proxy with ``surrogate="pck"`` (or ``p.set_stage("surrogate", "pck", {...})``): every surrogate stage
+   has the same inputs and output.
 3. ``observations`` -> ``posterior``: ``emcee_sampler`` (default) or ``mh_sampler`` (``sampler="mh_sampler"``, the
    thesis's Metropolis-Hastings), Gaussian likelihood per QoI with its own Jeffreys noise level integrated out and the
    proxy's error variance added (Eqs. 4.1-4.5), thesis budget 10^5 / 20 000 / 5 per chain, 4 chains.
@@ -63,7 +64,8 @@ def pipeline(samples: int = 300, cells: int = 100, degree_max: int = 3, sampler:
           inputs={"posterior": "posterior", "space": "space", "observations": "observations"},
           params={"experiments": observed_all, "draws": draws, "levels": LEVELS, "seed": seed, **model})
     p.add("prior_design", "lhs_design", inputs={"space": "space"}, params={"samples": prior_draws, "seed": seed + 1})
-    p.add("prior_responses", "forward", inputs={"design": "prior_design"}, params={"experiments": observed_all, **model})
+    p.add("prior_responses", "forward", inputs={"design": "prior_design"},
+          params={"experiments": observed_all, **model})
     p.add("prior_bands", "quantiles", inputs={"ensemble": "prior_responses"}, params={"levels": LEVELS})
     return p
 

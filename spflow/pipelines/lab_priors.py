@@ -72,7 +72,8 @@ def pipeline(front_end: str | None = "history_matching", mode: str = "relative",
           params={"names": list(table), "ranges": {n: table[n] for n in UNFITTED}, "mode": mode,
                   "relative": relative, "k": k})
     if front_end is not None:
-        p.include(_front_end(front_end).pipeline(quick=quick, study=study, profile=profile, **front_end_args), front_end, share=["space"])
+        front = _front_end(front_end).pipeline(quick=quick, study=study, profile=profile, **front_end_args)
+        p.include(front, front_end, share=["space"])
     return p
 
 

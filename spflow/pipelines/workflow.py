@@ -91,7 +91,8 @@ def _proxy_report(result: spflow.RunResult, outdir: Path) -> list[str]:
             row = val.isel(qoi=q)
             variable, exp = str(row["qoi_variable"].values), str(row["qoi_experiment"].values)
             r2 = val["r2"].where((val["output_variable"] == variable) & (val["output_experiment"] == exp)).median()
-            lines.append(f"{kind:6s} {variable + ':' + exp:18s} {float(row['r2_final']):9.4f} {float(row['r2_max']):9.4f} "
+            lines.append(f"{kind:6s} {variable + ':' + exp:18s} {float(row['r2_final']):9.4f} "
+                         f"{float(row['r2_max']):9.4f} "
                          f"{float(r2):19.4f} {float(row['mean_l2_error']):9.2e} {float(row['variance_l2_error']):9.2e}")
     return lines
 

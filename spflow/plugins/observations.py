@@ -115,8 +115,7 @@ class Observations(Stage):
                                          f"{exc}") from None
                 if "schedule" not in ds.attrs:
                     raise ParameterError(f"stage 'observations': coreflood {source_label(source)!r} has no 'schedule' "
-                                         "attr, so its "
-                                         "total PV is unknown; load it with a schedule")
+                                         "attr, so its total PV is unknown; load it with a schedule")
                 data.append(ds)
             self._data = data
         return self._data

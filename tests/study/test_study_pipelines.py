@@ -3,7 +3,7 @@ calibrating and BCF3 held out; ``profile="thesis"``: BCF1 alone), the study's ex
 observing node with their own core, rate and schedule, and ``spflow run|status|report --study FILE`` print the
 study's defaults at the start. The values checked against are typed here from the study files and Table 2.5."""
 
-import json
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +12,7 @@ import pytest
 import spflow
 import spflow.cli
 from spflow.core.overrides import apply_overrides
-from spflow.pipelines import bayesian_calibration, gap_diagnosis, history_matching, screening, slug_design, workflow
+from spflow.pipelines import bayesian_calibration, gap_diagnosis, history_matching, slug_design, workflow
 
 BUNDLED_CORE = {"LENGTH": 0.1524, "DIAMETER": 0.0508, "PORO": 0.23, "PERM": 700.0, "SWI": 0.2, "QINJ": 0.25}
 
@@ -49,8 +49,6 @@ def test_thesis_profile_trains_on_bcf1_alone():
 def test_observation_sources_carry_the_data_digest_and_the_studys_core():
     study = spflow.bundled_study()
     source = study.experiment("BCF3").observation_source()
-    import hashlib
-
     assert source["sha256"] == hashlib.sha256(Path(source["data"]).read_bytes()).hexdigest()
     assert source["attrs"]["core_length_m"] == 0.1524 and source["attrs"]["experiment"] == "BCF3"
     gap = gap_diagnosis.pipeline(quick=True).nodes["diagnosis"].params

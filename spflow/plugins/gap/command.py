@@ -34,7 +34,8 @@ __all__ = ["add_parser", "main"]
 def add_parser(sub) -> None:
     """Add the ``diagnose`` subcommand to an argparse subparsers object."""
     p = sub.add_parser("diagnose", help="diagnose the sim-to-real gap of a base model on coreflood data")
-    p.add_argument("--study", metavar="STUDY", help="a study file: its corefloods and base model (docs/your_own_data.md)")
+    p.add_argument("--study", metavar="STUDY",
+                   help="a study file: its corefloods and base model (docs/your_own_data.md)")
     p.add_argument("--observations", nargs="+", metavar="FILE", help="calibration corefloods (without --study)")
     p.add_argument("--heldout", nargs="+", default=[], metavar="FILE",
                    help="held-out corefloods (default: leave-one-slug-out scores)")

@@ -89,8 +89,9 @@ class Diagnose(Stage):
     optional_inputs = frozenset({"calibrated"})
     output = GAP_REPORT
     params = {
-        "calibration": Param(list, ["BCF1", "BCF2"], doc="calibration corefloods: bundled names, .nc/.csv paths or study experiments' "
-                                                      "{name, data, sha256, attrs} mappings"),
+        "calibration": Param(list, ["BCF1", "BCF2"],
+                             doc="calibration corefloods: bundled names, .nc/.csv paths or study experiments' "
+                                 "{name, data, sha256, attrs} mappings"),
         "heldout": Param(list, ["BCF3"], doc="held-out corefloods (empty: leave-one-slug-out scores)"),
         "base": Param(dict, TABLE_3_2_BASE, doc="base model: cells, effects, fixed, parameters, schedules"),
         "catalogue": Param(list, [], doc="candidate effects (empty: every registered effect)"),

@@ -41,7 +41,8 @@ OBJECTIVE_UNITS = ("M$", "kPa")
 @dataclass(frozen=True)
 class SlugDesignProblem:
     """The deterministic setting of one realisation: economics, scale-up, price model, fixed simulator overrides (the
-    reference flood's core, rate and fluids), the effect strengths, the reference slugs of Eq. 4.10 and the simulator's resolution."""
+    reference flood's core, rate and fluids), the effect strengths, the reference slugs of Eq. 4.10 and the
+    simulator's resolution."""
 
     price: OilPriceModel = field(default_factory=OilPriceModel)
     scale: ScaleUp = field(default_factory=ScaleUp)
