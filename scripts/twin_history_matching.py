@@ -3,9 +3,10 @@
 A "clean twin" has its truth inside the Table 3.2 ranges, no withheld mechanism (the model's own default effects) and
 measurement noise only (``NoiseModel`` with random transducer, oil-reading and assay errors but zero offset, drift
 and dead volume). The script writes BCF1-3 twins to netCDF files, runs the ``history_matching`` pipeline on them
-(PCE on BCF1, NSGA-II, simulator checks on BCF2/BCF3), and prints
+(default: PCE on BCF1 + BCF2, NSGA-II, simulator checks on BCF3; ``--profile thesis``: PCE on BCF1, checks on
+BCF2/BCF3), and prints
 
-* the relative L2 misfits on the held-out BCF2/BCF3 of the simulator at the final Pareto set and at the truth itself
+* the relative L2 misfits on the held-out corefloods of the simulator at the final Pareto set and at the truth itself
   (the truth's misfit is the noise floor), and their ratio (acceptance: <= 1.5), plus the min / median / max over
   the Pareto points of each point's own ratio (its mean held-out misfit / the truth's);
 * whether the truth lies inside the noise-consistent range of every parameter (the extent of the stage's
@@ -93,13 +94,15 @@ def main(argv=None) -> int:
     ap.add_argument("--generations", type=int, default=100)
     ap.add_argument("--seed", type=int, default=2024)
     ap.add_argument("--noise-seed", type=int, default=11, help="seed of the twins' measurement noise")
+    ap.add_argument("--profile", default="study", choices=["study", "thesis"],
+                    help="training corefloods: the bundled study's roles (BCF1 + BCF2) or the thesis's BCF1")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--cache", default=None, help="cache directory (default: a temporary one)")
     ap.add_argument("--out", default=None, help="write the figures here")
     args = ap.parse_args(argv)
     settings = dict(samples=args.samples, degree_max=args.degree_max, solver=args.solver, cells=args.cells,
                     population=args.population,
-                    generations=args.generations, seed=args.seed)
+                    generations=args.generations, seed=args.seed, profile=args.profile)
     with tempfile.TemporaryDirectory() as tmp:
         cache = Path(args.cache or tmp)
         r = twin_check(cache, Path(args.out) if args.out else None, jobs=args.jobs, noise_seed=args.noise_seed,

@@ -1,9 +1,11 @@
 """The ``spflow`` command: run, status, report, list, clean, diagnose.
 
-    spflow run PIPELINE [--quick] [--set NODE.PARAM=VALUE ...] [--until NODE] [--only NODE] [--force NODE] [--jobs N]
-                        [--backend loky|threads|dask] [--scheduler ADDRESS] [--cache DIR] [--out DIR]
-    spflow status PIPELINE [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
-    spflow report PIPELINE [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR] [--out DIR]
+    spflow run PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--until NODE]
+                        [--only NODE] [--force NODE] [--jobs N] [--backend loky|threads|dask] [--scheduler ADDRESS]
+                        [--cache DIR] [--out DIR]
+    spflow status PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
+    spflow report PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
+                           [--out DIR]
     spflow list [pipelines|stages|effects|params]
     spflow clean [--cache DIR] [--tmp]
     spflow diagnose --observations FILE [FILE ...] [--heldout FILE ...] --base CONFIG [--catalogue NAMES]
@@ -14,6 +16,9 @@ built-in or plugin pipeline (``spflow list pipelines``) or a dotted module (:mod
 the module defines ``pipeline`` (a Pipeline or a function returning one) and optionally ``report(result, outdir)``,
 called after a successful run; ``report.html`` (:mod:`spflow.core.html_report`) is written next to the figures it
 makes. ``--quick`` passes ``quick=True`` to ``pipeline`` when it takes it: the pipeline's small-budget profile.
+``--study FILE`` passes the study (:func:`spflow.load_study`, read and validated before any work) as ``study=`` and
+``--profile NAME`` as ``profile=``; a pipeline taking ``study`` runs on the bundled study without ``--study``, and the
+study's summary with every default it took is printed at the start and recorded in the report.
 ``--set node.param=value`` overrides one node's parameter (:mod:`spflow.core.overrides`).
 """
 
@@ -39,14 +44,25 @@ from spflow.plugins.gap.command import add_parser as add_diagnose_parser
 from spflow.plugins.gap.command import main as diagnose_command
 from spflow.export.command import add_parser as add_export_parser, main as export_command
 from spflow.study.command import add_parser as add_study_parsers, main as study_command
+from spflow.study.pipeline_inputs import resolve_study, study_settings
 
 
-def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False) -> Pipeline:
+def _takes(obj, name: str) -> bool:
+    """Whether ``obj`` is a pipeline builder (a function) taking the argument ``name``."""
+    return callable(obj) and not isinstance(obj, Pipeline) and name in inspect.signature(obj).parameters
+
+
+def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False, **given: Any) -> Pipeline:
+    """The module's pipeline, built with ``quick`` and the ``given`` builder arguments that are not ``None``."""
     obj = namespace.get("pipeline")
-    if quick and not (callable(obj) and not isinstance(obj, Pipeline) and "quick" in inspect.signature(obj).parameters):
+    if quick and not _takes(obj, "quick"):
         raise SpflowError(f"pipeline {spec!r} has no quick profile (its pipeline() takes no 'quick' argument)")
+    given = {k: v for k, v in given.items() if v is not None}
+    for name in given:
+        if not _takes(obj, name):
+            raise SpflowError(f"pipeline {spec!r} takes no --{name} (its pipeline() has no {name!r} argument)")
     if callable(obj) and not isinstance(obj, Pipeline):
-        obj = obj(quick=True) if quick else obj()
+        obj = obj(**given, **({"quick": True} if quick else {}))
     if not isinstance(obj, Pipeline):
         raise SpflowError(f"pipeline module {spec!r} must define 'pipeline' (a Pipeline or a function returning one)")
     return obj
@@ -56,9 +72,18 @@ def _load(args: argparse.Namespace) -> tuple[dict[str, Any], Pipeline, list[str]
     """The pipeline module's namespace, its pipeline with the ``--set`` overrides applied (validated before any
     work), and the run settings (which module was used, each override), printed here and recorded in the report."""
     loaded = load_pipeline_module(args.pipeline)
-    pipe = _pipeline_from(loaded.namespace, args.pipeline, args.quick)
+    study = None
+    if args.study is not None or _takes(loaded.namespace.get("pipeline"), "study"):
+        study = resolve_study(args.study)  # validated before any work; None -> the bundled study
+    pipe = _pipeline_from(loaded.namespace, args.pipeline, args.quick, study=study,
+                          profile=args.profile)
     overrides = apply_overrides(pipe, args.set or ())
-    settings = [f"pipeline {args.pipeline!r}: {loaded.origin}"] + [o.describe() for o in overrides]
+    settings = [f"pipeline {args.pipeline!r}: {loaded.origin}"]
+    if args.profile is not None:
+        settings.append(f"--profile {args.profile}")
+    if study is not None:
+        settings += ([] if args.study else ["no --study: the bundled study"]) + study_settings(study)
+    settings += [o.describe() for o in overrides]
     for line in settings:
         print(line)
     return loaded.namespace, pipe, settings
@@ -124,6 +149,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
     stale = [r.node for r in status(pipe, cache=args.cache) if not r.fresh]
     if stale:
         again = ["spflow", "run", args.pipeline, *(["--quick"] if args.quick else []),
+                 *(["--study", args.study] if args.study else []),
+                 *(["--profile", args.profile] if args.profile else []),
                  *[word for text in args.set or () for word in ("--set", text)]]
         raise SpflowError(f"{len(stale)} node(s) of {pipe.name!r} are not in the cache ({', '.join(stale[:5])}"
                           f"{', ...' if len(stale) > 5 else ''}); run `{shlex.join(again)}` first")
@@ -211,6 +238,10 @@ def build_parser() -> argparse.ArgumentParser:
     p_report.add_argument("--out", metavar="DIR", help="where the report goes (default out/<pipeline>)")
     for p in (p_run, p_status, p_report):
         p.add_argument("--quick", action="store_true", help="the pipeline's quick profile (small budgets)")
+        p.add_argument("--study", metavar="FILE", help="run on this study (default: the bundled study)")
+        p.add_argument("--profile", metavar="NAME", help="the pipeline's named set-up, e.g. 'thesis' (BCF1-only "
+                                                         "training) for history_matching, bayesian_calibration, "
+                                                         "workflow")
         p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE",
                        help="override a node's parameter (VALUE parsed as JSON, else a string); repeatable")
 

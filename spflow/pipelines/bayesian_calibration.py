@@ -1,16 +1,20 @@
-"""Chapter-4 Bayesian history matching: forward model -> design -> PCE proxy -> MCMC -> posterior predictive on BCF1-3.
+"""Chapter-4 Bayesian history matching: forward model -> design -> PCE proxy -> MCMC -> posterior predictive.
 
-The thesis's §4.5-4.6 as one cached DAG on the bundled corefloods (or any coreflood files, e.g. synthetic twins):
+The thesis's §4.5-4.6 as one cached DAG on a study's corefloods (default: the bundled study, BCF1-3; or any
+coreflood files with the study's names, e.g. synthetic twins). The study's ``calibration`` experiments train the proxy
+and the posterior, its ``heldout`` ones are predicted (bundled: BCF1 + BCF2 train, BCF3 is held out;
+``profile="thesis"``: BCF1 alone trains, as in the thesis):
 
 1. ``space``: the Table 4.1 ranges (uniform prior, Eq. 4.2).
-2. ``design`` (Latin hypercube) -> ``responses`` (simulator on the training coreflood BCF1) -> ``surrogate``: the
-   ``pce`` stage on pressure drop and oil cut of BCF1 (§4.5). Swap the proxy with ``surrogate="pck"`` (or
-   ``p.set_stage("surrogate", "pck", {...})``): every surrogate stage has the same inputs and output.
+2. ``design`` (Latin hypercube) -> ``responses`` (simulator on the training corefloods, each with its own core, rate
+   and schedule) -> ``surrogate``: the ``pce`` stage on pressure drop and oil cut of the training corefloods (§4.5).
+   Swap the proxy with ``surrogate="pck"`` (or ``p.set_stage("surrogate", "pck", {...})``): every surrogate stage
+   has the same inputs and output.
 3. ``observations`` -> ``posterior``: ``emcee_sampler`` (default) or ``mh_sampler`` (``sampler="mh_sampler"``, the
    thesis's Metropolis-Hastings), Gaussian likelihood per QoI with its own Jeffreys noise level integrated out and the
    proxy's error variance added (Eqs. 4.1-4.5), thesis budget 10^5 / 20 000 / 5 per chain, 4 chains.
-4. ``predictive``: the simulator on 200 posterior draws for BCF1 (training) and BCF2/BCF3 (held out): quantile bands
-   with and without measurement noise and the coverage of the observations (Figs. 4.4-4.5).
+4. ``predictive``: the simulator on 200 posterior draws for every observed coreflood (training and held out):
+   quantile bands with and without measurement noise and the coverage of the observations (Figs. 4.4-4.5).
 5. ``prior_design`` -> ``prior_responses`` -> ``prior_bands``: the prior response spread, drawn under Fig. 4.5.
 
     spflow run bayesian_calibration --jobs 2
@@ -23,9 +27,9 @@ from pathlib import Path
 import numpy as np
 
 import spflow
+from spflow.pipelines.history_matching import study_inputs
 from spflow.plugins.design.thesis_tables import TABLE_4_1
 
-EXPERIMENTS = ["BCF1", "BCF2", "BCF3"]
 QOIS = ["dp", "oil_cut"]
 LEVELS = [0.05, 0.5, 0.95]
 
@@ -33,28 +37,35 @@ LEVELS = [0.05, 0.5, 0.95]
 def pipeline(samples: int = 300, cells: int = 100, degree_max: int = 3, sampler: str = "emcee_sampler",
              surrogate: str = "pce", chains: int = 4, mcmc_samples: int = 100_000, burn: int = 20_000,
              thin: int = 5, draws: int = 200, prior_draws: int = 64, seed: int = 2024,
-             observed: list[str] | None = None, quick: bool = False) -> spflow.Pipeline:
-    """The chapter-4 DAG. ``observed``: bundled names or coreflood files for BCF1-3 (default: the bundled data);
-    ``quick``: small budgets."""
+             study=None, profile: str = "study", observed: list[str] | None = None,
+             quick: bool = False) -> spflow.Pipeline:
+    """The chapter-4 DAG on ``study`` (a study file, a Study, or ``None``: the bundled study). ``profile``: one of
+    ``PROFILES`` (see :func:`spflow.pipelines.history_matching.study_inputs`); ``observed``: coreflood files
+    replacing the study's data (their ``experiment`` attrs must be the study's names); ``quick``: small budgets."""
     if quick:
         samples, cells, degree_max, mcmc_samples, burn, draws, prior_draws = 80, 40, 2, 20_000, 5_000, 40, 16
-    model = {"cells": cells}
+    inputs = study_inputs(study, profile)
+    observed_all = inputs.forward(inputs.observed)
+    model = {"cells": cells, **inputs.model()}
     p = spflow.Pipeline("bayesian_calibration_quick" if quick else "bayesian_calibration")
     p.add("space", "parameter_space", params={"names": list(TABLE_4_1), "ranges": TABLE_4_1})
     p.add("design", "lhs_design", inputs={"space": "space"}, params={"samples": samples, "seed": seed})
-    p.add("responses", "forward", inputs={"design": "design"}, params={"experiments": ["BCF1"], **model})
-    proxy = {"variables": QOIS, "experiments": ["BCF1"]}
+    p.add("responses", "forward", inputs={"design": "design"},
+          params={"experiments": inputs.forward(inputs.training), **model})
+    proxy = {"variables": QOIS, "experiments": inputs.training_names}
     p.add("surrogate", surrogate, inputs={"space": "space", "design": "design", "responses": "responses"},
           params=proxy | ({"degree_max": degree_max} if surrogate == "pce" else {}))
-    p.add("observations", "observations", params={"experiments": list(observed or EXPERIMENTS)})
+    p.add("observations", "observations",
+          params={"experiments": list(observed) if observed else inputs.observations(inputs.observed)})
     p.add("posterior", sampler, inputs={"surrogate": "surrogate", "observations": "observations", "space": "space"},
-          params={"experiments": ["BCF1"], "variables": QOIS, "chains": chains, "samples": mcmc_samples,
+          params={"experiments": inputs.training_names, "variables": QOIS, "chains": chains, "samples": mcmc_samples,
                   "burn": burn, "thin": thin, "seed": seed})
     p.add("predictive", "posterior_predictive",
           inputs={"posterior": "posterior", "space": "space", "observations": "observations"},
-          params={"experiments": EXPERIMENTS, "draws": draws, "levels": LEVELS, "seed": seed, **model})
+          params={"experiments": observed_all, "draws": draws, "levels": LEVELS, "seed": seed, **model})
     p.add("prior_design", "lhs_design", inputs={"space": "space"}, params={"samples": prior_draws, "seed": seed + 1})
-    p.add("prior_responses", "forward", inputs={"design": "prior_design"}, params={"experiments": EXPERIMENTS, **model})
+    p.add("prior_responses", "forward", inputs={"design": "prior_design"},
+          params={"experiments": observed_all, **model})
     p.add("prior_bands", "quantiles", inputs={"ensemble": "prior_responses"}, params={"levels": LEVELS})
     return p
 
@@ -68,16 +79,20 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
     observations, prior = result["observations"], result["prior_bands"]
     posterior.to_netcdf(outdir / "posterior.nc")
     bands.to_netcdf(outdir / "predictive.nc")
+    training = list(dict.fromkeys(str(e) for e in posterior["block_experiment"].values))
+    heldout = [str(e) for e in bands["experiment"].values if str(e) not in training]
     written = [
         fig.trace_figure(posterior, outdir / "fig_b1_traces.png"),
         fig.autocorrelation_figure(posterior, outdir / "fig_c1_autocorrelation.png"),
         fig.prior_posterior_figure(posterior, outdir / "fig_d1_prior_posterior.png", truth=truth),
         fig.geweke_figure(posterior, outdir / "fig_e1_geweke.png"),
-        fig.predictive_figure(bands, observations, ["BCF1"], outdir / "fig_4_4_bcf1.png", prior=prior,
-                              title="Fig. 4.4: posterior prediction of the training coreflood BCF1"),
-        fig.predictive_figure(bands, observations, ["BCF2", "BCF3"], outdir / "fig_4_5_heldout.png", prior=prior,
-                              title="Fig. 4.5: posterior prediction of the held-out corefloods BCF2, BCF3"),
+        fig.predictive_figure(bands, observations, training, outdir / "fig_4_4_training.png", prior=prior,
+                              title=f"Fig. 4.4: posterior prediction of the training corefloods {', '.join(training)}"),
     ]
+    if heldout:
+        written.append(fig.predictive_figure(
+            bands, observations, heldout, outdir / "fig_4_5_heldout.png", prior=prior,
+            title=f"Fig. 4.5: posterior prediction of the held-out corefloods {', '.join(heldout)}"))
     table = summary(posterior)
     noise = summary(posterior, "sigma", "block")
     lines = [f"wrote {len(written)} figures, posterior.nc and predictive.nc to {outdir}",

@@ -48,12 +48,13 @@ def _front_end(name: str):
 
 
 def pipeline(front_end: str | None = "history_matching", mode: str = "relative", relative: float = 0.2,
-             k: float = 2.0, paths: dict[str, str] | None = None, quick: bool = False,
-             **front_end_args) -> spflow.Pipeline:
+             k: float = 2.0, paths: dict[str, str] | None = None, study=None, profile: str = "study",
+             quick: bool = False, **front_end_args) -> spflow.Pipeline:
     """Lab fits -> ``space`` (priors) [-> the ``front_end`` DAG built with ``front_end_args``].
 
     ``front_end``: "history_matching", "bayesian_calibration" or None (fits and priors only). ``paths``: fit node ->
     lab table path (default: the bundled synthetic tables). ``mode``/``relative``/``k``: see the ``priors`` stage.
+    ``study``/``profile``: the front end's corefloods (default: the bundled study; see ``history_matching``).
     ``quick``: the front end's own quick profile (small budgets).
     """
     if front_end is not None and front_end not in FRONT_ENDS:
@@ -71,7 +72,8 @@ def pipeline(front_end: str | None = "history_matching", mode: str = "relative",
           params={"names": list(table), "ranges": {n: table[n] for n in UNFITTED}, "mode": mode,
                   "relative": relative, "k": k})
     if front_end is not None:
-        p.include(_front_end(front_end).pipeline(quick=quick, **front_end_args), front_end, share=["space"])
+        front = _front_end(front_end).pipeline(quick=quick, study=study, profile=profile, **front_end_args)
+        p.include(front, front_end, share=["space"])
     return p
 
 

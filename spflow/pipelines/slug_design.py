@@ -1,5 +1,11 @@
 """Slug-size design under uncertainty (thesis §4.7) downstream of the chapter-4 Bayesian calibration.
 
+The reference flood is the study's (default: the bundled study): its first ``calibration`` experiment with a
+surfactant slug (else the first experiment with one) gives the core, rate and fluids of every simulated design and,
+through its SP slug and polymer drive, the reference concentrations and slug sizes of Eq. 4.10 (bundled: BCF1).
+``reference="thesis"`` keeps Table 4.2's reference slugs (0.25 PV of 6 780 ppm surfactant / 2 500 ppm polymer) on
+the reference flood's core.
+
 The ``bayesian_calibration`` DAG (forward model -> design -> PCE proxy -> MCMC posterior; see that pipeline) is
 included unchanged under the prefix ``bc.`` (its cached results are reused), and two ``slug_design`` nodes read its
 posterior ``bc.posterior``: EEIHV on (-NPV, max Δp) over the slug sizes (s_htds, s_sp, s_p) with the oil price
@@ -18,32 +24,46 @@ import numpy as np
 
 import spflow
 from spflow.pipelines import bayesian_calibration
+from spflow.study.pipeline_inputs import StudyInputs
 
 DRIFTS = {"design_up": 1.0e-5, "design_down": -1.0e-5}
 LABELS = {"design_up": "positive drift", "design_down": "negative drift"}
+#: ``reference`` values: the study's reference flood, or Table 4.2's reference slugs
+REFERENCES = ("study", "thesis")
 
 
 def pipeline(max_iter: int = 100, n_init: int = 20, batch: int = 1, cells: int = 100, knee_draws: int = 50,
-             steps_per_year: int = 365, seed: int = 2024, quick: bool = False) -> spflow.Pipeline:
-    """The calibration DAG as ``bc.*`` plus the two slug-design nodes; ``quick``: small budgets everywhere."""
+             steps_per_year: int = 365, seed: int = 2024, study=None, profile: str = "study",
+             reference: str = "study", quick: bool = False) -> spflow.Pipeline:
+    """The calibration DAG as ``bc.*`` (on ``study`` under ``profile``) plus the two slug-design nodes;
+    ``reference``: see the module docstring; ``quick``: small budgets everywhere."""
     p = spflow.Pipeline("slug_design_quick" if quick else "slug_design")
-    p.include(bayesian_calibration.pipeline(quick=quick), "bc")
+    p.include(bayesian_calibration.pipeline(quick=quick, study=study, profile=profile), "bc")
     add_design_nodes(p, "bc.posterior", max_iter=max_iter, n_init=n_init, batch=batch, cells=cells,
-                     knee_draws=knee_draws, steps_per_year=steps_per_year, seed=seed, quick=quick)
+                     knee_draws=knee_draws, steps_per_year=steps_per_year, seed=seed, study=study,
+                     reference=reference, quick=quick)
     return p
 
 
 def add_design_nodes(p: spflow.Pipeline, posterior: str, *, prefix: str = "", max_iter: int = 100, n_init: int = 20,
                      batch: int = 1, cells: int = 100, knee_draws: int = 50, steps_per_year: int = 365,
-                     seed: int = 2024, quick: bool = False) -> None:
-    """The nodes ``<prefix>design_up`` and ``<prefix>design_down`` reading the posterior node ``posterior``."""
+                     seed: int = 2024, study=None, reference: str = "study", quick: bool = False) -> None:
+    """The nodes ``<prefix>design_up`` and ``<prefix>design_down`` reading the posterior node ``posterior``, on the
+    reference flood of ``study`` (a study file, a Study, or ``None``: the bundled study)."""
+    if reference not in REFERENCES:
+        raise spflow.ParameterError(f"slug_design: reference {reference!r} is not one of {list(REFERENCES)}")
     if quick:
         max_iter, n_init, cells, knee_draws = 8, 8, 40, 10
+    inputs = StudyInputs.of(study)
+    flood = inputs.reference_flood()
+    model = {"fixed": dict(inputs.study.fixed, **flood.model_params()), "effects": dict(inputs.study.effects),
+             "reference_flood": dict(flood.forward_experiment()["schedule"], name=flood.name) if reference == "study"
+             else {}}
     for node, drift in DRIFTS.items():
         p.add(prefix + node, "slug_design", inputs={"posterior": posterior},
               params={"drift": drift, "steps_per_year": steps_per_year, "n_init": n_init, "max_iter": max_iter,
                       "batch": batch, "cells": cells, "knee_draws": knee_draws, "seed": seed,
-                      "snapshots": [1, max(1, max_iter // 2)]})
+                      "snapshots": [1, max(1, max_iter // 2)], **model})
 
 
 def summary(results: dict) -> list[str]:
@@ -89,4 +109,6 @@ def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     for number, node in (("4_9", "design_up"), ("4_10", "design_down")):
         written.append(fig.plot_knee_design(results[node], outdir / f"fig_{number}_knee_{node}.png",
                                             f"Fig. {number.replace('_', '.')}: knee design, {LABELS[node]}"))
-    return [f"wrote {len(written)} figures and {len(results)} Datasets to {outdir}", *summary(results)]
+    reference = next(iter(results.values())).attrs.get("reference_concentrations", "Table 4.2")
+    return [f"wrote {len(written)} figures and {len(results)} Datasets to {outdir}",
+            f"reference flood: {reference}", *summary(results)]

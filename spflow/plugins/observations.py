@@ -29,7 +29,7 @@ from spflow.core.hashing import canonical_hash
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
-from spflow.io import load_coreflood
+from spflow.io.observed_source import load_observed, source_label
 from spflow.io.format import VARIABLES
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.forward.simulate import common_grid, output_grid
@@ -97,7 +97,8 @@ class Observations(Stage):
     output = OBSERVATIONS
     params = {
         "experiments": Param(list, ["BCF1", "BCF2", "BCF3"],
-                             doc="bundled names (BCF1-3) or paths of coreflood files (.nc/.csv)"),
+                             doc="bundled names (BCF1-3), paths of coreflood files (.nc/.csv) or study experiments' "
+                                 "{name, data, sha256, attrs} mappings"),
         "variables": Param(list, ["dp", "oil_cut", "recovery"], choices=list(_ALLOWED), doc="measured variables"),
         "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="simulator output grid spacing"),
     }
@@ -108,12 +109,13 @@ class Observations(Stage):
             data = []
             for source in self.params["experiments"]:
                 try:
-                    ds = load_coreflood(source)
+                    ds = load_observed(source)
                 except (ValueError, OSError) as exc:
-                    raise ParameterError(f"stage 'observations' parameter 'experiments': {source!r}: {exc}") from None
+                    raise ParameterError(f"stage 'observations' parameter 'experiments': {source_label(source)!r}: "
+                                         f"{exc}") from None
                 if "schedule" not in ds.attrs:
-                    raise ParameterError(f"stage 'observations': coreflood {source!r} has no 'schedule' attr, so its "
-                                         "total PV is unknown; load it with a schedule")
+                    raise ParameterError(f"stage 'observations': coreflood {source_label(source)!r} has no 'schedule' "
+                                         "attr, so its total PV is unknown; load it with a schedule")
                 data.append(ds)
             self._data = data
         return self._data
@@ -138,7 +140,7 @@ class Observations(Stage):
             {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1]}) for name, v in values.items()}
             | {"total_pv": ("experiment", totals, {"units": "PV"})},
             coords={"experiment": names, "pv": grid},
-            attrs={"pv_step": step, "sources": " ".join(map(str, self.params["experiments"])),
+            attrs={"pv_step": step, "sources": " ".join(map(source_label, self.params["experiments"])),
                    "coreflood_attrs": json.dumps({n: _json_attrs(ds.attrs) for n, ds in zip(names, data)})},
         )
         out["pv"].attrs["units"] = "PV"

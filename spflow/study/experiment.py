@@ -59,24 +59,41 @@ class Experiment:
         """Pore volume ``pi D^2 / 4 L phi`` (ml)."""
         return pore_volume_ml(self.model_params())
 
-    def observations(self) -> xr.Dataset:
-        """The coreflood Dataset (:func:`spflow.io.load_coreflood` format) with the study's resolved metadata as
-        attrs: ``experiment`` = the study name, the core attrs with units, ``pore_volume_ml``/``ooip_ml`` (from the
-        core where the file has none), the schedule JSON and the measurement chain ``noise_*``. A predict-only
-        experiment without data raises :class:`StudyError`."""
-        if self.dataset is None:
-            raise StudyError(f"experiment {self.name!r} ({self.role}) has no data file: nothing was observed")
-        ds = self.dataset.copy()
-        attrs = dict(ds.attrs)
+    def observed_attrs(self) -> dict:
+        """The metadata the study resolved for the data file (JSON-able): ``experiment`` = the study name, the core
+        attrs with units, ``pore_volume_ml``/``ooip_ml`` (from the core where the file has none), the schedule JSON,
+        the measurement chain ``noise_*`` and ``study_role``; they override the file's own attrs."""
+        own = {} if self.dataset is None else self.dataset.attrs
         params = self.model_params()
-        attrs.setdefault("pore_volume_ml", pore_volume_ml(params))
-        attrs.setdefault("ooip_ml", ooip_ml(params))
+        attrs: dict = {}
+        if "pore_volume_ml" not in own:
+            attrs["pore_volume_ml"] = pore_volume_ml(params)
+        if "ooip_ml" not in own:
+            attrs["ooip_ml"] = ooip_ml(params)
         for attr, value in self.core.items():
             attrs.update({attr: value, f"{attr}_units": core_unit(attr)})
         attrs.update(self.measurement.to_attrs())
         attrs.update(experiment=self.name, schedule=schedule_json(self.schedule), study_role=self.role)
-        ds.attrs = attrs
+        return attrs
+
+    def observations(self) -> xr.Dataset:
+        """The coreflood Dataset (:func:`spflow.io.load_coreflood` format) with :meth:`observed_attrs` as attrs.
+        A predict-only experiment without data raises :class:`StudyError`."""
+        if self.dataset is None:
+            raise StudyError(f"experiment {self.name!r} ({self.role}) has no data file: nothing was observed")
+        ds = self.dataset.copy()
+        ds.attrs = dict(ds.attrs) | self.observed_attrs()
         return ds
+
+    def observation_source(self) -> dict:
+        """The ``observations`` / ``diagnose`` stages' description of this experiment's data: ``{"name", "data",
+        "sha256", "attrs"}`` (:func:`spflow.io.observed_source.load_observed`); the digest and the resolved attrs
+        make the stages' provenance keys see an edited data file or study. A predict-only experiment without data
+        raises :class:`StudyError`."""
+        if self.data is None:
+            raise StudyError(f"experiment {self.name!r} ({self.role}) has no data file: nothing was observed")
+        attrs = {k: v.item() if hasattr(v, "item") else v for k, v in self.observed_attrs().items()}
+        return {"name": self.name, "data": str(self.data), "sha256": self.data_digest(), "attrs": attrs}
 
     def data_digest(self) -> str | None:
         """SHA-256 of the data file's bytes (so caching keys see a changed file); ``None`` without data."""

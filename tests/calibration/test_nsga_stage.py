@@ -117,7 +117,7 @@ def test_objectives_are_half_squared_misfits_of_the_training_coreflood(space, bu
     slopes = np.where(index.variable == "dp", 3e3, 0.05) * rng.standard_normal((9, len(index)))
     surrogate = _surrogate(space, index, slopes, intercept)
     names, lo, hi = list(space["param"].values), space["lower"].values, space["upper"].values
-    problem = SurrogateMisfitProblem(surrogate, bundled, names, lo, hi, ["recovery", "dp"], "BCF1")
+    problem = SurrogateMisfitProblem(surrogate, bundled, names, lo, hi, ["recovery", "dp"], ["BCF1"])
     x = lo + (hi - lo) * rng.random((25, 9))
     expected = _objectives_by_hand(space, bundled, index, intercept, slopes, x)
     np.testing.assert_allclose(problem.objectives(x), expected, rtol=1e-12)
@@ -125,7 +125,7 @@ def test_objectives_are_half_squared_misfits_of_the_training_coreflood(space, bu
     # the surrogate stores its parameters in another order: the stage must permute the columns
     perm = rng.permutation(9)
     shuffled = LinearSurrogate([names[i] for i in perm], lo[perm], hi[perm], index, intercept, slopes[perm])
-    problem = SurrogateMisfitProblem(shuffled, bundled, names, lo, hi, ["recovery", "dp"], "BCF1")
+    problem = SurrogateMisfitProblem(shuffled, bundled, names, lo, hi, ["recovery", "dp"], ["BCF1"])
     np.testing.assert_allclose(problem.objectives(x), expected, rtol=1e-12)
 
     # and the stage's stored Pareto objectives are those of its stored designs

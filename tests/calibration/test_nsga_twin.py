@@ -21,7 +21,8 @@ SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "twin_history_matchin
 
 def test_twin_calibration_on_bcf1_transfers_to_the_held_out_corefloods(tmp_path):
     twin = runpy.run_path(str(SCRIPT))
-    r = twin["twin_check"](tmp_path, samples=60, degree_max=2, cells=30, population=40, generations=30)
+    r = twin["twin_check"](tmp_path, samples=60, degree_max=2, cells=30, population=40, generations=30,
+                           profile="thesis")  # BCF1 trains, BCF2/BCF3 are held out
     cal = r["calibration"]
     assert cal.attrs["generations_run"] == 30 and cal["checkpoint"].values.tolist() == [30]
     # the prior's held-out misfit: 16 Latin-hypercube points of the Table 3.2 box, same simulator and data

@@ -66,8 +66,9 @@ def test_status_of_a_builtin_by_name_outside_the_repository(empty, capsys):
     assert main(["status", "history_matching", "--quick"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0] == "pipeline 'history_matching': built-in (spflow.pipelines.history_matching)"
+    assert out[1] == "no --study: the bundled study"  # then the study's summary, then one line per node
     nodes = history_matching.pipeline(quick=True).nodes
-    table = {line.split()[0]: line for line in out[1:]}
+    table = {line.split()[0]: line for line in out[-len(nodes):]}
     assert set(table) == set(nodes)
     for name, node in nodes.items():
         assert node.stage in table[name] and "stale — never run" in table[name]

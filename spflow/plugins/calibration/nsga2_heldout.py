@@ -15,6 +15,7 @@ import xarray as xr
 from spflow.core.stage import StageContext
 from spflow.plugins.calibration.aligned_data import align
 from spflow.plugins.calibration.nsga2_misfits import relative_l2_misfit
+from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.surrogates.outputs import stack_outputs
 
@@ -34,7 +35,7 @@ class HeldOutCheck:
         self.forward = forward
         self.observations = observations
         self.variables = [str(v) for v in variables]
-        self.experiments = [str(e) for e in forward.params["experiments"]]
+        self.experiments = [e.name for e in forward_experiments(forward.params["experiments"], forward.params["fixed"])]
         self.names = [str(n) for n in names]
         self.pairs = [(v, e) for e in self.experiments for v in self.variables]
         # the observations themselves as a one-sample "prediction": align() then validates every pair up front

@@ -1,7 +1,8 @@
 """The calibration problem of §3.6 as a pymoo ``Problem``: minimise Q = [q_1, q_2] (Eq. 3.17) over the prior box.
 
 Each objective is the half squared misfit of Eq. 3.16 between the surrogate's prediction P(ξ) of one training
-coreflood variable (thesis: s = 1 cumulative recovery, s = 2 pressure drop of BCF1) and its observation. The problem
+variable (thesis: s = 1 cumulative recovery, s = 2 pressure drop of BCF1) and its observation, summed over the
+training corefloods when there are several (e.g. BCF1 + BCF2: one objective per variable, as in Eq. 3.17). The problem
 is vectorised: pymoo hands a whole generation's offspring (n, n_param) to ``_evaluate`` and the surrogate is called
 once for all of them.
 
@@ -23,10 +24,11 @@ __all__ = ["SurrogateMisfitProblem"]
 
 
 class SurrogateMisfitProblem(Problem):
-    """Objectives ½‖P(ξ) − y‖² per (variable, training experiment) on a surrogate, over ``lower <= ξ <= upper``."""
+    """Objectives Σ_e ½‖P_e(ξ) − y_e‖² per variable over the training experiments on a surrogate, over
+    ``lower <= ξ <= upper``. ``pairs`` lists the (variable, experiment) blocks, variable-major."""
 
     def __init__(self, surrogate: Surrogate, observations, names: list[str], lower: np.ndarray, upper: np.ndarray,
-                 variables: list[str], experiment: str):
+                 variables: list[str], experiments: list[str]):
         names = [str(n) for n in names]
         if sorted(names) != sorted(surrogate.names):
             raise ParameterError(f"calibration space parameters {names} differ from the surrogate's {surrogate.names}")
@@ -39,9 +41,10 @@ class SurrogateMisfitProblem(Problem):
             raise ParameterError(f"calibration space leaves the surrogate's training box for {outside}: a surrogate "
                                  "must not be extrapolated")
         self.surrogate = surrogate
-        self.pairs = [(str(v), str(experiment)) for v in variables]
+        self.n_experiments = len(experiments)
+        self.pairs = [(str(v), str(e)) for v in variables for e in experiments]
         self.aligned = align(surrogate.outputs, observations, self.pairs)
-        super().__init__(n_var=len(names), n_obj=len(self.pairs), xl=lower, xu=upper, vtype=float)
+        super().__init__(n_var=len(names), n_obj=len(variables), xl=lower, xu=upper, vtype=float)
 
     def mean(self, x: np.ndarray) -> np.ndarray:
         """The surrogate's mean prediction P(ξ) at points ``x`` (n, n_param) in space order: (n, n_output)."""
@@ -50,7 +53,8 @@ class SurrogateMisfitProblem(Problem):
 
     def objectives(self, x: np.ndarray) -> np.ndarray:
         """Q(ξ) for points ``x`` (n, n_param) in space order: (n, n_objective)."""
-        return half_squared_misfit(self.mean(x), self.aligned, self.pairs)
+        per_pair = half_squared_misfit(self.mean(x), self.aligned, self.pairs)
+        return per_pair.reshape(len(per_pair), -1, self.n_experiments).sum(axis=-1)
 
     def _evaluate(self, x, out, *args, **kwargs):
         out["F"] = self.objectives(x)

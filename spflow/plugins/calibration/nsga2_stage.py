@@ -2,13 +2,15 @@
 on held-out corefloods (thesis §3.6-3.7, Algorithm 3).
 
 * Objectives (Eqs. 3.16-3.17): ½‖P(ξ) − y‖² of each ``variables`` entry (thesis: cumulative recovery, pressure
-  drop) of the ``training`` coreflood (BCF1), P = the surrogate's mean, evaluated for a whole generation at once
+  drop), summed over the ``training`` corefloods (thesis: BCF1 alone; the bundled study: BCF1 + BCF2), P = the
+  surrogate's mean, evaluated for a whole generation at once
   (:class:`~spflow.plugins.calibration.nsga2_problem.SurrogateMisfitProblem`).
 * Search space: the ``space`` box (Table 3.2 ranges), which must lie inside the surrogate's training box.
 * Optimiser: pymoo NSGA-II with the thesis's settings (population 120, tournament of 4, crossover probability 0.8,
   mutation probability 0.01; mapping in :mod:`~spflow.plugins.calibration.nsga2_algorithm`), seeded.
 * Algorithm 3: every ``n_cross`` generations and at the last one the current Pareto set is simulated on the
-  ``held_out`` corefloods (BCF2, BCF3) with the forward model (``fixed``, ``effects``, ``cells``, ``pv_step`` as the
+  ``held_out`` corefloods (bundled names or a study's ``{name, schedule, params}`` mappings, each simulated with
+  its own core, rate and schedule) with the forward model (``fixed``, ``effects``, ``cells``, ``pv_step`` as the
   surrogate's training runs); σ_loss = mean relative L2 misfit; stop at ``generations`` or when σ_loss <
   ``sigma_tol`` (0 disables the early stop).
 
@@ -22,7 +24,10 @@ lab's measurement-error model (``confidence_count`` of the evaluated designs lie
 ``confidence_best``, the design of the minimum χ² (the noise-consistent best point, ``spflow export opm
 --calibration``)
 (:mod:`~spflow.plugins.calibration.nsga2_confidence`; attrs ``confidence_*`` give the level, the χ² threshold, the
-minimum χ², the number of data, the archive size and whether the noise model came from the data). Units are in each
+minimum χ², the number of data, the archive size and whether the noise model came from the data). A parameter whose
+noise-consistent range covers at least ``undetermined_fraction`` of its prior width is one the training data leave
+undetermined: attrs ``undetermined`` (their names) and ``undetermined_warning`` say so, since held-out predictions
+that depend on it are not constrained by the calibration. Units are in each
 variable's attrs; ``param_unit`` and ``objective_unit`` coordinates give the per-parameter and per-objective units.
 """
 
@@ -46,7 +51,7 @@ from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward import effects as forward_effects
 from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.parameters import resolve_params
-from spflow.plugins.forward.schedule import BCF_SCHEDULES
+from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.observations import OBSERVATIONS
 from spflow.plugins.surrogates.contract import SURROGATE, load_surrogate
@@ -80,12 +85,14 @@ NSGA2_CALIBRATION = DatasetSchema(
         "confidence_best": Variable(("param",), units=_PER_PARAM),
         "confidence_count": Variable((), kind="i", units="1"),
     },
-    attrs=("training", "generations_run", "stop_reason", "confidence_level", "confidence_threshold",
+    attrs=("training", "undetermined", "generations_run", "stop_reason", "confidence_level", "confidence_threshold",
            "confidence_chi2_min", "confidence_n_data", "confidence_noise_model", "confidence_fit_pvalue"),
     doc="NSGA-II history match: Pareto set, history, held-out misfits, calibrated and noise-consistent ranges",
 )
 
 _OBJECTIVE_CHOICES = ["recovery", "dp", "oil_cut"]
+#: Share of the prior width a noise-consistent range must cover for its parameter to count as undetermined.
+UNDETERMINED_FRACTION = 0.9
 #: Goodness-of-fit level below which the noise-consistent ranges carry a warning (chi2 test of the minimum).
 _MISFIT_PVALUE = 0.01
 
@@ -101,9 +108,11 @@ class NSGA2Calibration(Stage):
     inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
     params = {
-        "training": Param(str, "BCF1", doc="experiment whose observations define the objectives"),
-        "held_out": Param(list, ["BCF2", "BCF3"], choices=sorted(BCF_SCHEDULES),
-                          doc="corefloods simulated at the Pareto set for cross-validation"),
+        "training": Param(list, ["BCF1"], doc="experiments whose observations define the objectives (summed per "
+                                               "variable; thesis: BCF1)"),
+        "held_out": Param(list, ["BCF2", "BCF3"],
+                          doc="corefloods simulated at the Pareto set for cross-validation: bundled names or "
+                              "{name, schedule, params} mappings (as the forward stage's experiments)"),
         "variables": Param(list, ["recovery", "dp"], choices=_OBJECTIVE_CHOICES,
                            doc="one objective ½‖P − y‖² per variable (thesis: recovery, dp)"),
         "population": Param(int, THESIS_GA["pop_size"], bounds=(4, 100_000), doc="population size pop_size"),
@@ -125,6 +134,9 @@ class NSGA2Calibration(Stage):
         "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="output grid of the held-out runs"),
         "confidence_level": Param(float, 0.95, bounds=(0.0, 1.0),
                                   doc="level of the likelihood-ratio region of the noise-consistent ranges, in (0, 1)"),
+        "undetermined_fraction": Param(float, UNDETERMINED_FRACTION, bounds=(0.0, 1.0),
+                                       doc="a noise-consistent range covering this share of the prior width marks its "
+                                           "parameter as undetermined by the training data"),
     }
 
     @classmethod
@@ -135,13 +147,22 @@ class NSGA2Calibration(Stage):
     def __init__(self, **params):
         super().__init__(**params)
         p = self.params
-        for name in ("variables", "held_out"):
+        if any(not isinstance(t, str) for t in p["training"]):
+            raise ParameterError(f"stage 'nsga2_calibration' parameter 'training' must list experiment names, got "
+                                 f"{p['training']}")
+        for name in ("variables", "training"):
             if not p[name] or len(set(p[name])) != len(p[name]):
                 raise ParameterError(f"stage 'nsga2_calibration' parameter {name!r} must be a non-empty list without "
                                      f"repeats, got {p[name]}")
-        if p["training"] in p["held_out"]:
-            raise ParameterError(f"stage 'nsga2_calibration': training experiment {p['training']!r} must not be one of "
-                                 f"the held-out experiments {p['held_out']}")
+        held_out = [e.name for e in forward_experiments(p["held_out"], p["fixed"])]  # distinct, non-empty
+        both = [t for t in p["training"] if t in held_out]
+        if both:
+            raise ParameterError(f"stage 'nsga2_calibration': training experiment(s) {both} must not be among the "
+                                 f"held-out experiments {held_out}")
+        if not 0.0 < p["undetermined_fraction"] <= 1.0:
+            raise ParameterError(f"stage 'nsga2_calibration' parameter 'undetermined_fraction' = "
+                                 f"{p['undetermined_fraction']!r} must lie in (0, 1]")
+        self.held_out_names = held_out
         if any(not isinstance(g, int) for g in p["snapshots"]):
             raise ParameterError(f"stage 'nsga2_calibration' parameter 'snapshots' must list generation numbers "
                                  f">= 1, got {p['snapshots']}")
@@ -170,7 +191,25 @@ class NSGA2Calibration(Stage):
         region = noise.region(problem.mean, lower, upper, history.archive, p["confidence_level"])
         units = [_squared_unit(model.outputs.units.get(v, "1")) for v in p["variables"]]
         ds = self._dataset(history, names, space, units)
-        return self._add_confidence(ds, region, noise, len(history.archive))
+        return self._add_undetermined(self._add_confidence(ds, region, noise, len(history.archive)))
+
+    def _add_undetermined(self, ds: xr.Dataset) -> xr.Dataset:
+        """``ds`` with ``confidence_fraction`` (noise-consistent width / prior width) and the attrs ``undetermined``
+        (parameters whose range covers at least ``undetermined_fraction`` of the prior) and, when there are such
+        parameters, ``undetermined_warning``."""
+        fraction = ((ds["confidence_upper"] - ds["confidence_lower"]) / (ds["prior_upper"] - ds["prior_lower"])).values
+        ds = ds.assign(confidence_fraction=("param", fraction, {"units": "1"}))
+        limit = self.params["undetermined_fraction"]
+        loose = [str(n) for n, f in zip(ds["param"].values, fraction) if f >= limit]
+        ds.attrs["undetermined"] = " ".join(loose)
+        ds.attrs["undetermined_fraction"] = limit
+        if loose:
+            training = ", ".join(self.params["training"])
+            ds.attrs["undetermined_warning"] = (
+                f"the training data ({training}) leave {', '.join(loose)} undetermined (noise-consistent range >= "
+                f"{limit:.0%} of the prior width): held-out predictions that depend on "
+                f"{'it' if len(loose) == 1 else 'them'} are not constrained by this calibration")
+        return ds
 
     @staticmethod
     def _add_confidence(ds: xr.Dataset, region: ConfidenceRegion, noise: NoiseMisfit, archive_size: int):
@@ -250,10 +289,10 @@ class NSGA2Calibration(Stage):
                 "snapshot": np.array(snaps, dtype=np.int64),
                 "member": np.arange(width),
                 "checkpoint": np.array(checks, dtype=np.int64),
-                "experiment": list(p["held_out"]),
+                "experiment": self.held_out_names,
             },
             attrs={
-                "training": p["training"],
+                "training": ", ".join(p["training"]),
                 "generations_run": int(last),
                 "stop_reason": history.stop_reason,
                 "seed": p["seed"],

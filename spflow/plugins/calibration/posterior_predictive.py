@@ -25,7 +25,6 @@ from spflow.core.schema import DatasetSchema
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.failures import drop_failed
-from spflow.plugins.forward.schedule import BCF_SCHEDULES
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.observations import OBSERVATIONS
 from spflow.plugins.statistics.quantiles import Quantiles
@@ -64,8 +63,9 @@ class PosteriorPredictive(Stage):
     optional_inputs = frozenset({"observations"})
     output = PREDICTIVE
     params = {
-        "experiments": Param(list, ["BCF1", "BCF2", "BCF3"], choices=sorted(BCF_SCHEDULES),
-                             doc="corefloods to predict (training and held-out)"),
+        "experiments": Param(list, ["BCF1", "BCF2", "BCF3"],
+                             doc="corefloods to predict (training and held-out): bundled names or {name, schedule, "
+                                 "params} mappings (as the forward stage's experiments)"),
         "draws": Param(int, 200, bounds=(1, 100_000), doc="posterior draws run through the simulator"),
         "levels": Param(list, [0.05, 0.5, 0.95], bounds=(0.0, 1.0), doc="quantile levels; outer two = the band"),
         "noise": Param(bool, True, doc="also build the predictive ensemble with measurement noise"),

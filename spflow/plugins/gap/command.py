@@ -2,12 +2,17 @@
 
     spflow diagnose --observations FILE [FILE ...] [--heldout FILE ...] --base CONFIG [--catalogue NAMES]
                     [--out DIR] [--jobs N]
+    spflow diagnose --study STUDY [--base CONFIG] [--catalogue NAMES] [--out DIR] [--jobs N]
 
 ``FILE`` is a coreflood (``.nc``/``.csv`` in the format of ``docs/data.md``, or a bundled name). ``CONFIG`` is a
 TOML file: the base model (``cells``, ``[effects]``, ``[fixed]``, ``[parameters]``, ``[schedules]``; see
 :mod:`spflow.plugins.gap.base_model`), optionally ``catalogue = [...]`` and a ``[diagnosis]`` table with any of
 the ``diagnose`` stage's options (``variables``, ``pv_step``, ``alpha``, ``shortlist``, ``max_effects``,
-``max_nfev``, ``starts``, ...). ``--catalogue`` (comma-separated effect names) overrides the file's. Writes
+``max_nfev``, ``starts``, ...). ``--catalogue`` (comma-separated effect names) overrides the file's. With
+``--study`` the corefloods are the study's (``calibration`` and ``heldout`` roles, each with its declared core, rate,
+schedule and measurement chain) and the base model is the study's (``[parameters]``, ``[effects]``) on 60 cells; an
+optional ``--base`` file then gives only ``cells``, ``catalogue`` and ``[diagnosis]``. The study's summary and every
+default it took are printed first. Writes
 ``gap_report.nc``, ``summary.json`` and the figures into ``DIR`` (default ``out/diagnose``); when the verdict leaves
 two or more candidates in its ambiguity set, also the proposed next coreflood (``next_experiment.toml``, ``.json``,
 ``next_experiment_study.toml``; :mod:`~spflow.plugins.gap.next_after_diagnosis`), unless ``--no-next-experiment``.
@@ -31,10 +36,13 @@ __all__ = ["add_parser", "main"]
 def add_parser(sub) -> None:
     """Add the ``diagnose`` subcommand to an argparse subparsers object."""
     p = sub.add_parser("diagnose", help="diagnose the sim-to-real gap of a base model on coreflood data")
-    p.add_argument("--observations", nargs="+", required=True, metavar="FILE", help="calibration corefloods")
+    p.add_argument("--study", metavar="STUDY",
+                   help="a study file: its corefloods and base model (docs/your_own_data.md)")
+    p.add_argument("--observations", nargs="+", metavar="FILE", help="calibration corefloods (without --study)")
     p.add_argument("--heldout", nargs="+", default=[], metavar="FILE",
                    help="held-out corefloods (default: leave-one-slug-out scores)")
-    p.add_argument("--base", required=True, metavar="CONFIG", help="TOML base model (and [diagnosis] options)")
+    p.add_argument("--base", metavar="CONFIG", help="TOML base model (and [diagnosis] options); with --study: cells, "
+                                                    "catalogue and [diagnosis] only")
     p.add_argument("--catalogue", metavar="NAMES", help="comma-separated candidate effects (default: all)")
     p.add_argument("--out", default=str(Path("out") / "diagnose"), metavar="DIR")
     p.add_argument("--jobs", type=int, default=1, metavar="N", help="parallel forward runs")
@@ -53,6 +61,22 @@ def _config(path: str) -> dict:
         raise ParameterError(f"--base {path!r}: not valid TOML: {exc}") from None
 
 
+def _study_inputs(path: str, config: dict) -> tuple[list, list, dict]:
+    """The study's calibration and held-out sources and its base model (``cells`` from ``config``, default 60);
+    prints the study's summary and the defaults it took."""
+    from spflow.study.pipeline_inputs import StudyInputs, study_settings
+
+    extra = sorted(set(config) - {"cells"})
+    if extra:
+        raise ParameterError(f"--base with --study: the study gives the base model, so the file may hold only "
+                             f"'cells', 'catalogue' and [diagnosis]; found {extra}")
+    inputs = StudyInputs.of(path)
+    for line in study_settings(inputs.study):
+        print(line)
+    base = inputs.study.base_model_config() | {"cells": config.get("cells", 60)}
+    return inputs.observations(inputs.training), inputs.observations(inputs.heldout), base
+
+
 def main(args: argparse.Namespace) -> int:
     """Run the diagnosis of ``args`` (from :func:`add_parser`), write the report, print the verdict."""
     from .figures import write_figures
@@ -60,7 +84,11 @@ def main(args: argparse.Namespace) -> int:
     from .report import report_dataset, summary
     from .stage import OPTION_PARAMS, Diagnose
 
-    config = _config(args.base)
+    if args.study is None and (not args.observations or args.base is None):
+        raise ParameterError("spflow diagnose needs --study STUDY, or --observations FILE ... with --base CONFIG")
+    if args.study is not None and (args.observations or args.heldout):
+        raise ParameterError("spflow diagnose: --study gives the corefloods; drop --observations/--heldout")
+    config = _config(args.base) if args.base is not None else {}
     options = config.pop("diagnosis", {})
     validate_params("diagnose [diagnosis]", OPTION_PARAMS, options)  # names, types and ranges, before any work
     catalogue = config.pop("catalogue", [])
@@ -68,8 +96,11 @@ def main(args: argparse.Namespace) -> int:
         catalogue = [name.strip() for name in args.catalogue.split(",") if name.strip()]
     if args.jobs < 1:
         raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
-    stage = Diagnose(calibration=list(args.observations), heldout=list(args.heldout), base=config,
-                     catalogue=catalogue, **options)
+    if args.study is not None:
+        calibration, heldout, config = _study_inputs(args.study, config)
+    else:
+        calibration, heldout = list(args.observations), list(args.heldout)
+    stage = Diagnose(calibration=calibration, heldout=heldout, base=config, catalogue=catalogue, **options)
     ctx = StageContext("diagnose", n_jobs=args.jobs)
     diag = stage.diagnosis(ctx)
     report = report_dataset(diag)

@@ -99,6 +99,16 @@ def _relative(observed: np.ndarray, relative: float, reference: float = 0.0) -> 
     return relative * np.maximum(level, _FLOOR * max(level.max(), reference))
 
 
+def uninformative(variable: str, experiment, observed: np.ndarray) -> bool:
+    """Whether ``observed`` is an effluent assay of a species ``experiment`` never injects that reads zero
+    throughout (e.g. surfactant in a polymer flood): it has no noise scale and carries no information, so a layout
+    leaves it out."""
+    if variable not in _INJECTED:
+        return False
+    injected = max(getattr(slug, _INJECTED[variable]) for slug in experiment.schedule.slugs)
+    return injected == 0.0 and not np.any(observed)
+
+
 def block_error_model(variable: str, experiment, observed: np.ndarray) -> BlockErrorModel:
     """The error model of ``variable`` of ``experiment`` (an :class:`~spflow.plugins.gap.observed.Experiment`)
     at its finite observations ``observed`` (module docstring)."""

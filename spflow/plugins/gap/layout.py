@@ -14,7 +14,7 @@ import numpy as np
 
 from spflow.core.errors import ParameterError
 
-from .error_model import BlockErrorModel, block_error_model
+from .error_model import BlockErrorModel, block_error_model, uninformative
 from .observed import Experiment
 
 __all__ = ["Block", "Layout", "make_layout"]
@@ -90,16 +90,19 @@ def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | No
                 report_only: Sequence[str] = (), dropped: list[str] | None = None) -> Layout:
     """Blocks of every measured variable (or only ``variables``) of every experiment, experiments first.
 
-    A block whose error model is degenerate (e.g. an all-zero effluent assay of a species never injected: no
-    noise scale can weight its misfit) raises ``ParameterError`` naming the variable, experiment and file, unless
-    its variable is in ``report_only`` (shown in reports, not in any likelihood): then it is left out and a note
-    saying so is appended to ``dropped``."""
+    An assay of a species the experiment never injects that reads zero throughout is left out (it carries no
+    information, :func:`~spflow.plugins.gap.error_model.uninformative`). Any other block whose error model is
+    degenerate (no noise scale can weight its misfit) raises ``ParameterError`` naming the variable, experiment and
+    file, unless its variable is in ``report_only`` (shown in reports, not in any likelihood): then it is left out
+    and a note saying so is appended to ``dropped``."""
     blocks = []
     for exp in experiments:
         for variable, series in exp.observed.items():
             if variables is not None and variable not in variables:
                 continue
             index = np.flatnonzero(np.isfinite(series))
+            if uninformative(variable, exp, series[index]):
+                continue
             pv = exp.pv[index]
             try:
                 noise = block_error_model(variable, exp, series[index])

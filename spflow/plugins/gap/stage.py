@@ -19,7 +19,7 @@ from spflow.core.hashing import canonical_hash
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
-from spflow.io import load_coreflood
+from spflow.io.observed_source import load_observed, source_label
 from spflow.plugins.design.schemas import DESIGN
 from spflow.plugins.forward.numba_cache import source_digest
 
@@ -101,7 +101,9 @@ class Diagnose(Stage):
     optional_inputs = frozenset({"calibrated"})
     output = GAP_REPORT
     params = {
-        "calibration": Param(list, ["BCF1", "BCF2"], doc="calibration corefloods: bundled names or .nc/.csv paths"),
+        "calibration": Param(list, ["BCF1", "BCF2"],
+                             doc="calibration corefloods: bundled names, .nc/.csv paths or study experiments' "
+                                 "{name, data, sha256, attrs} mappings"),
         "heldout": Param(list, ["BCF3"], doc="held-out corefloods (empty: leave-one-slug-out scores)"),
         "base": Param(dict, TABLE_3_2_BASE, doc="base model: cells, effects, fixed, parameters, schedules"),
         "catalogue": Param(list, [], doc="candidate effects (empty: every registered effect)"),
@@ -126,10 +128,11 @@ class Diagnose(Stage):
                 out = []
                 for source in sources:
                     try:
-                        ds = load_coreflood(source)
+                        ds = load_observed(source)
                     except (ValueError, OSError) as exc:
-                        raise ParameterError(f"stage 'diagnose' parameter {which!r}: {source!r}: {exc}") from None
-                    ds.encoding["source"] = str(source)  # named in messages about this coreflood's data
+                        raise ParameterError(f"stage 'diagnose' parameter {which!r}: {source_label(source)!r}: "
+                                             f"{exc}") from None
+                    ds.encoding["source"] = source_label(source)  # named in messages about this coreflood's data
                     out.append(ds)
                 return out
 

@@ -29,6 +29,7 @@ from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.effects import default_registry
 from spflow.plugins.forward.failures import reject_failed
 from spflow.plugins.forward.numba_cache import source_digest
+from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.stage import Forward
 
@@ -45,7 +46,7 @@ _DEFAULT_QOIS = ["recovery_final", "dp_max"]
 SCREENING_PARAMS = {
     **{k: Forward.params[k] for k in _FORWARD_KEYS},
     "experiments": replace(Forward.params["experiments"], default=["BCF1"],
-                           doc="bundled injection schedules (the thesis screens on BCF1)"),
+                           doc="bundled names or {name, schedule, params} mappings (the thesis screens on BCF1)"),
     "qois": Param(list, _DEFAULT_QOIS, choices=QOI_CHOICES,
                   doc="recovery_final, dp_max (per experiment) and/or response variables for per-time-step indices"),
     "select_on": Param(list, _DEFAULT_QOIS, choices=QOI_CHOICES, doc="QoIs (among qois) the selection score uses"),
@@ -150,7 +151,8 @@ class ScreeningStage(Stage):
         out.attrs = {
             "method": self.method,
             "mode": self.params["mode"],
-            "experiments": ", ".join(self.params["experiments"]),
+            "experiments": ", ".join(e.name for e in forward_experiments(self.params["experiments"],
+                                                                          self.params["fixed"])),
             "cells": self.params["cells"],
             "runs": int(design.sizes["sample"]),
             "seed": self.params["seed"],

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .slug_schedule import slug_schedule
+from .slug_schedule import REFERENCE, SlugReference, slug_schedule
 
 __all__ = ["plot_price_paths", "plot_front_evolution", "plot_knee_design"]
 
@@ -143,7 +143,8 @@ def plot_knee_design(ds: xr.Dataset, path: str | Path, title: str) -> Path:
     """Figs. 4.9-4.10: schedule and responses of the knee design over the posterior draws."""
     plt = _pyplot()
     x = ds["knee_design"].values
-    sched = slug_schedule(*x, total_pv=ds.attrs["total_pv"])
+    reference = SlugReference.from_json(ds.attrs["reference_flood"]) if "reference_flood" in ds.attrs else REFERENCE
+    sched = slug_schedule(*x, total_pv=ds.attrs["total_pv"], reference=reference)
     fig, axes = plt.subplots(2, 2, figsize=(10, 7))
     ax = axes[0, 0]
     edges = np.concatenate([[0.0], np.cumsum([s.pv for s in sched.slugs])])

@@ -29,7 +29,7 @@ from spflow.plugins.forward.simulate import simulate
 
 from .economics import Economics, ScaleUp, project_npv
 from .oil_price import OilPriceModel
-from .slug_schedule import DESIGN_VARIABLES, slug_schedule
+from .slug_schedule import DESIGN_VARIABLES, REFERENCE, SlugReference, slug_schedule
 
 __all__ = ["SlugDesignProblem", "Realisations", "NoisyObjective", "OBJECTIVES", "OBJECTIVE_UNITS"]
 
@@ -40,8 +40,9 @@ OBJECTIVE_UNITS = ("M$", "kPa")
 
 @dataclass(frozen=True)
 class SlugDesignProblem:
-    """The deterministic setting of one realisation: economics, scale-up, price model, fixed simulator overrides and
-    the simulator's resolution."""
+    """The deterministic setting of one realisation: economics, scale-up, price model, fixed simulator overrides (the
+    reference flood's core, rate and fluids), the effect strengths, the reference slugs of Eq. 4.10 and the
+    simulator's resolution."""
 
     price: OilPriceModel = field(default_factory=OilPriceModel)
     scale: ScaleUp = field(default_factory=ScaleUp)
@@ -49,6 +50,8 @@ class SlugDesignProblem:
     fixed: Mapping[str, float] = field(default_factory=dict)
     cells: int = 100
     pv_step: float = 0.01
+    reference: SlugReference = REFERENCE
+    effects: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def total_pv(self) -> float:
@@ -57,11 +60,12 @@ class SlugDesignProblem:
 
     def schedule(self, x: Sequence[float]) -> Schedule:
         """The injection schedule of design ``x`` (Eq. 4.10), ending at :attr:`total_pv`."""
-        return slug_schedule(*map(float, x), total_pv=self.total_pv)
+        return slug_schedule(*map(float, x), total_pv=self.total_pv, reference=self.reference)
 
     def response(self, x: Sequence[float], theta: Mapping[str, float]) -> xr.Dataset:
         """The simulator's Dataset for design ``x`` with parameters ``theta`` on top of :attr:`fixed`."""
-        return simulate(self.schedule(x), dict(self.fixed, **theta), cells=self.cells, pv_step=self.pv_step)
+        return simulate(self.schedule(x), dict(self.fixed, **theta), cells=self.cells, pv_step=self.pv_step,
+                        effects=dict(self.effects))
 
     def outcome(self, response: xr.Dataset, x: Sequence[float], prices: np.ndarray) -> tuple[float, float, float]:
         """(-NPV [M$], max Δp [kPa], tertiary oil [PV]) of a simulated design for annual ``prices`` S(t_j)."""

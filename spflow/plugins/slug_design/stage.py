@@ -25,6 +25,8 @@ from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.calibration.posterior import POSTERIOR, flat_theta
+from spflow.plugins.forward.effects import default_registry
+from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.stage import Forward
 
 from .bgo_loop import BGOResult, run_bgo
@@ -33,7 +35,7 @@ from .front_uncertainty import front_uncertainty
 from .knee import knee_point
 from .objectives import OBJECTIVE_UNITS, OBJECTIVES, NoisyObjective, Realisations, SlugDesignProblem
 from .oil_price import OilPriceModel
-from .slug_schedule import DESIGN_VARIABLES, design_bounds, minimum_total_pv
+from .slug_schedule import DESIGN_VARIABLES, REFERENCE, SlugReference, design_bounds, minimum_total_pv
 
 __all__ = ["SlugDesign", "SLUG_DESIGN"]
 
@@ -67,7 +69,7 @@ def _snapshot_recorder(wanted: set[int], store: dict[int, BGOResult]):
 
 class SlugDesign(Stage):
     name = "slug_design"
-    version = "1"
+    version = "2"
     description = "slug-size design under price and parameter uncertainty: EEIHV on -NPV and max dp (thesis §4.7)"
     inputs = {"posterior": POSTERIOR}
     optional_inputs = frozenset({"posterior"})
@@ -93,7 +95,11 @@ class SlugDesign(Stage):
         "knee_draws": Param(int, 50, bounds=(1, 100_000), doc="posterior draws run at the knee design"),
         "cells": Param(int, 100, bounds=(4, 5000), doc="simulator grid cells"),
         "pv_step": Param(float, 0.01, bounds=(1e-4, 0.1), unit="PV", doc="simulator output spacing"),
-        "fixed": Param(dict, {}, doc="simulator parameter overrides (UTCHEM names) applied to every run"),
+        "fixed": Param(dict, {}, doc="simulator parameter overrides (UTCHEM names) applied to every run (a study's "
+                                     "reference flood: its core, rate and fluids)"),
+        "effects": Param(dict, {}, doc="effect name -> strength of every run (as the forward stage's)"),
+        "reference_flood": Param(dict, {}, doc="schedule ({name, slugs}) of the reference flood whose SP slug and "
+                                               "polymer drive set Eq. 4.10's reference; {} = Table 4.2's"),
         "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="random seed (LHS, GP restarts, draws, price paths)"),
         "reference": Param(list, [0.0, 50.0],
                            doc="hypervolume reference [E[NPV] M$, E[max dp] kPa]: designs losing money or above "
@@ -119,7 +125,8 @@ class SlugDesign(Stage):
                 f"{(minimum_total_pv() - scale.start_pv) / economics.years:.4g} PV/year so that the IWF, three slugs "
                 f"of up to 1 PV and an extended water flood fit in the project life")
         problem = SlugDesignProblem(price=price, scale=scale, economics=economics, fixed=dict(p["fixed"]),
-                                    cells=p["cells"], pv_step=p["pv_step"])
+                                    cells=p["cells"], pv_step=p["pv_step"], reference=self.reference,
+                                    effects=dict(p["effects"]))
         if posterior is None:
             return Realisations(problem)
         return Realisations(problem, flat_theta(posterior), [str(n) for n in posterior["param"].values])
@@ -127,6 +134,13 @@ class SlugDesign(Stage):
     def __init__(self, **params):
         super().__init__(**params)
         self._reference()  # a malformed reference fails when the pipeline is planned, before any work
+        flood = self.params["reference_flood"]
+        try:
+            self.reference = SlugReference.from_schedule(flood) if flood else REFERENCE
+        except ValueError as exc:
+            raise ParameterError(f"stage 'slug_design' parameter 'reference_flood': {exc}") from None
+        resolve_params(self.params["fixed"])
+        default_registry().resolve(self.params["effects"])
 
     def _reference(self) -> np.ndarray | None:
         """The reference point in the minimised objectives (-NPV, max dp), or None for the adaptive rule."""
@@ -249,7 +263,10 @@ class SlugDesign(Stage):
             "project_years": e.years, "tde_usd_per_year": e.tde_usd_per_year,
             "chemical_prices_usd_per_lb": f"salt {e.salt_usd_per_lb}, surfactant {e.surfactant_usd_per_lb}, "
                                           f"polymer {e.polymer_usd_per_lb}",
-            "reference_concentrations": "surfactant 6780 ppm, polymer 2500 ppm at 0.25 PV (Eq. 4.10)",
+            "reference_concentrations": problem.reference.describe() + " (Eq. 4.10; "
+                                        + ("Table 4.2" if not self.params["reference_flood"] else
+                                           f"from {self.params['reference_flood'].get('name', 'the study')}") + ")",
+            "reference_flood": problem.reference.to_json(),
             "parameters": "Table 2.4 defaults (deterministic)" if draws.theta is None else "posterior draws",
             "posterior_draws": 0 if draws.theta is None else int(draws.theta.shape[0]),
             "objective_1": "-NPV [M$] (Eq. 4.7), minimised", "objective_2": "max dp [kPa], minimised",

@@ -13,6 +13,8 @@ The output is the final surrogate (kind ``pce``) plus the history over the desig
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import xarray as xr
 from scipy.stats import qmc
@@ -21,6 +23,7 @@ from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import SPACE
+from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 
 from .contract import SURROGATE
@@ -42,6 +45,9 @@ class AdaptivePCE(Stage):
     params = {
         **PCE_PARAMS,
         **{k: v for k, v in Forward.params.items() if k in _FORWARD_PARAMS and k != "experiments"},
+        "experiments": replace(PCE_PARAMS["experiments"],
+                               doc="experiments simulated and approximated: bundled names or {name, schedule, params} "
+                                   "mappings (as the forward stage's)"),
         "n_initial": Param(int, 50, bounds=(3, 100_000), doc="first design size (thesis: 50)"),
         "n_increment": Param(int, 50, bounds=(1, 100_000), doc="points added per iteration"),
         "n_max": Param(int, 500, bounds=(3, 1_000_000), doc="simulation budget (largest design size)"),
@@ -51,7 +57,8 @@ class AdaptivePCE(Stage):
 
     def __init__(self, **params):
         super().__init__(**params)
-        check_lists(self.name, self.params)
+        self._names = [e.name for e in forward_experiments(self.params["experiments"], self.params["fixed"])]
+        check_lists(self.name, self.params | {"experiments": self._names})
         if self.params["n_initial"] > self.params["n_max"]:
             raise ParameterError(f"stage 'adaptive_pce': n_initial = {self.params['n_initial']} exceeds n_max = "
                                  f"{self.params['n_max']}")
@@ -80,7 +87,7 @@ class AdaptivePCE(Stage):
                                                                                          for d in designs)))
             response = xr.concat(responses, dim="sample", data_vars="minimal", coords="minimal",
                                  compat="override").assign_coords(sample=design["sample"].values)
-            data = training_set(space, design, response, list(p["variables"]), list(p["experiments"]))
+            data = training_set(space, design, response, list(p["variables"]), self._names)
             model = PCE.fit(data.names, data.lower, data.upper, data.outputs, data.x, data.y, **fit_options(p, ctx))
             rows.append((data.x.shape[0], np.mean(model.loo), np.mean(model.modified_loo), np.mean(model.empirical),
                          model.info["degree"]))

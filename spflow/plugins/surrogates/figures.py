@@ -173,17 +173,18 @@ def moments_figure(surrogate: xr.Dataset | Mapping[str, xr.Dataset], responses: 
 
 def band_figure(surrogate: xr.Dataset, design: xr.Dataset, responses: xr.Dataset, path: str | Path, *,
                 n_show: int = 3, reference: xr.Dataset | None = None, variables: Sequence[str] = ("dp", "recovery"),
-                experiment: str = "BCF1") -> Path:
+                experiment: str = "BCF1", schedule=None) -> Path:
     """Fig. 3.15: for the first ``n_show`` validation points, the surrogate's mean ± 2σ over PV (σ² its predicted
     variance), the simulator (markers) and optionally a ``reference`` surrogate's mean (dashed, e.g. the PCE);
     below, the same band around the mean with the simulator's offset from it. Dotted lines: slug ends of
-    ``experiment`` (Table 2.5). Titles give the fraction of all validation values inside the band."""
+    ``schedule`` (anything :func:`~spflow.plugins.forward.schedule.as_schedule` takes; default: ``experiment``'s
+    Table 2.5 schedule). Titles give the fraction of all validation values inside the band."""
     d = band_data(surrogate, design, responses, n_show=n_show, reference=reference, variables=variables,
                   experiment=experiment)
     plt = _pyplot()
     fig, axes = plt.subplots(2, len(variables), figsize=(5.5 * len(variables), 7.5), sharex=True, squeeze=False,
                              gridspec_kw={"height_ratios": [3, 2]})
-    slug_ends = np.cumsum([slug.pv for slug in as_schedule(experiment).slugs])[:-1]
+    slug_ends = np.cumsum([slug.pv for slug in as_schedule(experiment if schedule is None else schedule).slugs])[:-1]
     name_of = surrogate_label(surrogate)
     for (ax, ax_err), v in zip(axes.T, variables):
         scale, name = _axis(v, d[f"{v}_mean"].attrs["units"])
