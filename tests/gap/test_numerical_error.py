@@ -7,7 +7,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from spflow.core.errors import ParameterError
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.forward.simulate import simulate
@@ -72,12 +71,11 @@ def test_degenerate_scales_name_variable_experiment_and_file(tmp_path):
     exps = load_experiments([str(path)], 0.1)
     series = exps[0].observed["c_surfactant_out"]
     assert np.all(series[np.isfinite(series)] == 0.0)   # never injected, never produced
-    # in the likelihood: a clear error naming the variable, the experiment and the file
-    with pytest.raises(ParameterError, match=r"variable 'c_surfactant_out' of experiment 'PF' \(.*polymer_only.nc\)"
-                                             r".*AR\(1\) scales must be finite and > 0"):
-        make_layout(exps, ["dp", "c_surfactant_out"])
-    # only reported: left out, with a note, the other variables kept
-    notes = []
-    layout = make_layout(exps, report_only=["c_surfactant_out"], dropped=notes)
-    assert "c_surfactant_out" not in layout.variables and {"dp", "oil_cut", "c_polymer_out"} <= set(layout.variables)
-    assert len(notes) == 1 and "polymer_only.nc" in notes[0] and "not in the likelihood" in notes[0]
+    # an assay of a species never injected that reads zero carries no information: left out with a note naming
+    # the variable, the experiment and the file, whether the likelihood asks for it or not (other variables kept)
+    for variables, report_only in ((["dp", "c_surfactant_out"], ()), (None, ["c_surfactant_out"])):
+        notes = []
+        layout = make_layout(exps, variables, report_only=report_only, dropped=notes)
+        assert "c_surfactant_out" not in layout.variables and "dp" in layout.variables
+        assert len(notes) == 1 and "'c_surfactant_out'" in notes[0] and "'PF'" in notes[0]
+        assert "polymer_only.nc" in notes[0] and "never injects" in notes[0]

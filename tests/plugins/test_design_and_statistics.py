@@ -64,3 +64,18 @@ def test_quantiles_match_numpy(tmp_path):
     with pytest.raises(spflow.ParameterError, match="outside the allowed range \\[0.0, 1.0\\]"):
         spflow.run(spflow.Pipeline("q2").add_data("ens", ens).add("q", "quantiles", inputs={"ensemble": "ens"},
                                                                    params={"levels": [1.5]}), cache=tmp_path)
+
+
+def test_quantiles_skip_failure_reasons_and_failed_rows():
+    """A forward ensemble with a failed sample (NaN row, a ``failure`` reason): the quantiles are those of the
+    finished samples (numpy's nanquantile here) and the failure count is recorded."""
+    from spflow.core.stage import StageContext
+    from spflow.plugins.statistics.quantiles import Quantiles
+
+    dp = np.array([[1.0, 2.0], [3.0, 4.0], [np.nan, np.nan], [5.0, 8.0]])
+    ensemble = xr.Dataset({"dp": (("sample", "pv"), dp, {"units": "Pa"}),
+                           "failure": ("sample", np.array(["", "", "BCF1: step budget", ""], dtype=object))})
+    out = Quantiles(levels=[0.5]).run(StageContext("q", n_jobs=1, verbose=False), ensemble=ensemble)
+    assert "failure" not in out and out.attrs["failed_samples"] == 1
+    np.testing.assert_allclose(out["dp"].sel(quantile=0.5).values, np.nanquantile(dp, 0.5, axis=0))
+    np.testing.assert_allclose(out["dp_mean"].values, np.nanmean(dp, axis=0))

@@ -91,7 +91,7 @@ def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | No
     """Blocks of every measured variable (or only ``variables``) of every experiment, experiments first.
 
     An assay of a species the experiment never injects that reads zero throughout is left out (it carries no
-    information, :func:`~spflow.plugins.gap.error_model.uninformative`). Any other block whose error model is
+    information, :func:`~spflow.plugins.gap.error_model.uninformative`), with a note appended to ``dropped``. Any other block whose error model is
     degenerate (no noise scale can weight its misfit) raises ``ParameterError`` naming the variable, experiment and
     file, unless its variable is in ``report_only`` (shown in reports, not in any likelihood): then it is left out
     and a note saying so is appended to ``dropped``."""
@@ -102,6 +102,10 @@ def make_layout(experiments: Sequence[Experiment], variables: Sequence[str] | No
                 continue
             index = np.flatnonzero(np.isfinite(series))
             if uninformative(variable, exp, series[index]):
+                if dropped is not None:
+                    dropped.append(f"variable {variable!r} of experiment {exp.name!r} ({exp.source}) left out: it "
+                                   "reads zero throughout and the experiment never injects that species (no "
+                                   "information)")
                 continue
             pv = exp.pv[index]
             try:

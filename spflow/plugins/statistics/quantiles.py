@@ -20,7 +20,10 @@ class Quantiles(Stage):
     params = {"levels": Param(list, [0.1, 0.5, 0.9], bounds=(0.0, 1.0), doc="quantile levels in [0, 1]")}
 
     def run(self, ctx: StageContext, ensemble: xr.Dataset) -> xr.Dataset:
-        varying = [v for v in ensemble.data_vars if "sample" in ensemble[v].dims]
+        per_sample = [v for v in ensemble.data_vars if "sample" in ensemble[v].dims]
+        # numbers only: a per-sample text variable (the forward stage's ``failure`` reasons) has no quantiles; failed
+        # samples are NaN rows, which the quantiles skip, and their count is recorded
+        varying = [v for v in per_sample if ensemble[v].dtype.kind in "fiu"]
         sub = ensemble[varying]
         with warnings.catch_warnings():  # NaN padding past an experiment's end is all-NaN across samples
             warnings.simplefilter("ignore", RuntimeWarning)
@@ -31,7 +34,9 @@ class Quantiles(Stage):
             out[v].attrs = dict(ensemble[v].attrs)
             out[f"{v}_mean"].attrs = dict(ensemble[v].attrs)
         for v in ensemble.data_vars:
-            if v not in varying:
+            if v not in per_sample:
                 out[v] = ensemble[v]
         out.attrs = dict(ensemble.attrs, ensemble_size=ensemble.sizes["sample"])
+        if "failure" in ensemble:
+            out.attrs["failed_samples"] = int(sum(bool(str(r)) for r in ensemble["failure"].values))
         return out
