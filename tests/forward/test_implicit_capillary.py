@@ -32,7 +32,7 @@ def waterflood(cells: int, capillary: str = "implicit", cfl: float = 0.5, effect
 
 
 def test_implicit_matches_the_explicit_reference_at_small_steps():
-    """Recovery within 2e-3 all along and dp within 1 % after the inlet transient of the explicit scheme (cfl 0.1
+    """Recovery within 2e-3 all along and dp within 1 % after the inlet transient (0.15 PV) of the explicit scheme (cfl 0.1
     on top of its diffusion limit) on a capillary-dominated waterflood; the implicit run takes the advective step
     (no diffusion limit)."""
     ref = waterflood(25, "explicit", 0.1)
@@ -41,11 +41,11 @@ def test_implicit_matches_the_explicit_reference_at_small_steps():
     assert ref.attrs["n_capillary_limited"] >= 0.95 * ref.attrs["n_steps"]
     assert ref.attrs["n_steps"] >= 100 * imp.attrs["n_steps"]
     assert np.max(np.abs(imp.recovery.values - ref.recovery.values)) <= 2e-3
-    # dp from 0.1 PV on: before, the imbibition front meets connate water, whose capped Brooks-Corey Pc (1000 x the
+    # dp from 0.15 PV on: before, the imbibition front meets connate water, whose capped Brooks-Corey Pc (1000 x the
     # entry pressure) makes dp swing negative and non-converged in both schemes (explicit at 0.02 PV: -658, -528,
-    # -411 Pa at 25, 50, 100 cells); the lagged zero mobility of connate cells holds the implicit front back
-    # longer (docs/forward_model.md)
-    later = ref.pv.values >= 0.1
+    # -411 Pa at 25, 50, 100 cells; at 0.1 PV still 56.5, 55.4, 54.8 Pa); the lagged zero mobility of connate
+    # cells holds the implicit front back longer (docs/forward_model.md)
+    later = ref.pv.values >= 0.15
     rel = np.abs(imp.dp.values[later] / ref.dp.values[later] - 1.0)
     assert np.max(rel) <= 0.01
     # and Pc matters here: without it the recovery at 1.5 PV differs by far more than the tolerance
@@ -54,14 +54,19 @@ def test_implicit_matches_the_explicit_reference_at_small_steps():
 
 
 def test_implicit_converges_as_cells_double():
-    """Successive differences of the final recovery and dp over 25-50-100-200 cells shrink at an observed order
-    > 0.5 (the first-order time and split error with dt proportional to dx)."""
+    """Over 25-50-100-200 cells (dt proportional to dx) the final recovery converges to the explicit scheme's (whose
+    own grid error is < 1e-6 here: 25 and 50 cells agree to 1e-6) and the successive differences of the final dp
+    shrink, both at an observed order > 0.5 (first-order time and split error)."""
     runs = [waterflood(n) for n in (25, 50, 100, 200)]
-    for var in ("recovery", "dp"):
-        values = np.array([float(ds[var].values[-1]) for ds in runs])
-        diffs = np.abs(np.diff(values))
-        orders = np.log2(diffs[:-1] / diffs[1:])
-        assert np.all(orders > 0.5), (var, values, orders)
+    ref = [waterflood(n, "explicit") for n in (25, 50)]
+    assert abs(ref[0].recovery.values[-1] - ref[1].recovery.values[-1]) <= 1e-6
+    errors = np.array([abs(ds.recovery.values[-1] - ref[1].recovery.values[-1]) for ds in runs])
+    orders = np.log2(errors[:-1] / errors[1:])
+    assert np.all(orders > 0.5), (errors, orders)
+    dp = np.array([ds.dp.values[-1] for ds in runs])
+    diffs = np.abs(np.diff(dp))
+    orders = np.log2(diffs[:-1] / diffs[1:])
+    assert np.all(orders > 0.5), (dp, orders)
 
 
 def test_implicit_steps_of_a_capillary_dominated_flood_stay_within_fifty_times_the_ordinary_count():

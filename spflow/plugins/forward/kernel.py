@@ -11,8 +11,9 @@ Per step (all in pore-volume units, see ``transport``):
    total Darcy velocity uniform, so the implicit pressure equation reduces to the integral of ``u / (k lambda_T)``
    over the cells (plus the capillary term when Pc is on) -- ``transport.pressure_profile``;
 4. time step: ``dt = cfl dx / max_i speed_i`` (advective CFL from the local wave-speed bound), with Pc at most the
-   step at which the step-start capillary fluxes change a cell's water volume by ``CAPILLARY_DS_MAX`` (an accuracy
-   limit: the implicit capillary step needs none for stability; with the explicit reference path
+   step at which the step-start capillary fluxes change a cell's water volume by ``CAPILLARY_DS_MAX``, but not
+   below ``CAPILLARY_MIN_FRACTION`` of the advective step (an accuracy limit: the implicit capillary step needs
+   none for stability; with the explicit reference path
    ``implicit_pc=False`` the rate gets the diffusion limit ``+ 2 max_i D_cap,i / dx^2`` instead), capped by a ramp
    from every slug start (``ramp_step``:
    the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
@@ -32,8 +33,9 @@ GIL, numba has no clock); the failing cell reported is the one that limits the n
 Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status`` is a ``state_layout`` error code and
 ``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell; ``stats[N_STATS]`` counts the step
 halvings (``ST_HALVINGS``), the steps whose step was set by the capillary term rather than the wave speed
-(``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one) and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component,
-the amount in place at the start, injected, produced and in place at the end (PV units), for the mass balance.
+(``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one)
+and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component, the amount in place at the
+start, injected, produced and in place at the end (PV units), for the mass balance.
 """
 
 import math
@@ -66,8 +68,11 @@ RAMP_SPEED = 16.0
 RAMP_GROWTH = 1.25
 # accuracy control of the implicit capillary step (stability needs none): the capillary flux of the step-start
 # state may change a cell's water volume by at most CAPILLARY_DS_MAX per step (the saturation-change limit of
-# production simulators, e.g. ECLIPSE's DSMAX); docs/forward_model.md has the measured time error
+# production simulators, e.g. ECLIPSE's DSMAX), but it shortens the advective step by at most the factor
+# CAPILLARY_MIN_FRACTION: in a capillary-dominated flood the explicit fluxes overestimate the change the implicit
+# step makes (it stops at capillary equilibrium); docs/forward_model.md has the measured time error
 CAPILLARY_DS_MAX = 0.05
+CAPILLARY_MIN_FRACTION = 0.05
 
 
 @njit(cache=True, error_model="numpy")
@@ -377,7 +382,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             stats[ST_CAPILLARY] += 1.0
         dt_stable = cfl / rate if rate > 0.0 else np.inf
         if capillary and implicit_pc:
-            dt_cap = capillary_change_step(pr, n, dx, k_over_ul, cap_flux)
+            dt_cap = max(capillary_change_step(pr, n, dx, k_over_ul, cap_flux), CAPILLARY_MIN_FRACTION * dt_stable)
             if dt_cap < dt_stable:
                 dt_stable = dt_cap
                 stats[ST_CAPILLARY] += 1.0

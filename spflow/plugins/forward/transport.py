@@ -180,8 +180,13 @@ def capillary_fluxes(pr, n, dx, prm_k_over_ul, out):
 
 @njit(cache=True, error_model="numpy")
 def _carrier_pc(pr, i, s, pc0, lambda_b, sigma_ref):
-    """Capillary pressure of cell ``i``'s curve (its residuals, window and IFT, Eq. 1.8) at carrier saturation ``s``."""
-    sbar = pr[L.SBAR + int(pr[L.PCX, i]) - 1, i] + (s - pr[L.S1 + int(pr[L.PCX, i]) - 1, i]) / pr[L.WINDOW, i]
+    """Capillary pressure of cell ``i``'s curve (its residuals, window and IFT, Eq. 1.8) at carrier saturation ``s``
+    (its own Pc where the saturation window is empty)."""
+    window = pr[L.WINDOW, i]
+    if not window > 0.0:
+        return pr[L.PCAP, i]
+    l = int(pr[L.PCX, i]) - 1
+    sbar = pr[L.SBAR + l, i] + (s - pr[L.S1 + l, i]) / window
     return brooks_corey_pc(pc0, sbar, lambda_b, pr[L.SIGW, i], sigma_ref)
 
 
