@@ -32,9 +32,9 @@ def waterflood(cells: int, capillary: str = "implicit", cfl: float = 0.5, effect
 
 
 def test_implicit_matches_the_explicit_reference_at_small_steps():
-    """Recovery within 2e-3 all along and dp within 1 % after the inlet transient (0.15 PV) of the explicit scheme (cfl 0.1
-    on top of its diffusion limit) on a capillary-dominated waterflood; the implicit run takes the advective step
-    (no diffusion limit)."""
+    """Recovery within 2e-3 all along and dp within 1 % after the inlet transient (0.15 PV) of the explicit scheme
+    (cfl 0.1 on top of its diffusion limit) on a capillary-dominated waterflood; the implicit run takes the
+    advective step (no diffusion limit)."""
     ref = waterflood(25, "explicit", 0.1)
     imp = waterflood(25)
     # the reference is capillary dominated: its diffusion limit set (nearly) every step

@@ -152,8 +152,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     (``param_<NAME>``) and effect strength (``effect_<name>``), the per-component relative mass-balance error,
     ``n_steps``, ``wall_time_s``, the budgets ``max_steps`` and ``max_wall_s`` and the step-control counts
     ``n_halvings`` (retried steps), ``n_capillary_limited`` (steps whose step the capillary term set: the
-    saturation-change limit of the implicit step, the diffusion limit of the explicit one) and ``n_ramp_limited`` (steps capped by the ramp after a slug start) (and ``slug_rate_ml_min``, the rate
-    of every slug, when a slug sets its own).
+    saturation-change limit of the implicit step, the diffusion limit of the explicit one) and ``n_ramp_limited``
+    (steps capped by the ramp after a slug start) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
+    sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
     ``D = C^(C_J) / C_J = a / (1 + b C_J)`` pore volumes with ``a = AD41 + AD42 C_SEP`` and ``b = B4D`` for polymer
