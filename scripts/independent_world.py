@@ -16,7 +16,11 @@ capillary desaturation and pressure, kinetic adsorption).
 Cases: ``null`` (the base model holds every mechanism of the truth), withheld ``adsorption``, ``ipv``,
 ``rrf`` (permeability reduction; OPM's acts through adsorbed polymer, so adsorption is on in truth and base) and
 ``all_three`` (adsorption, IPV and permeability reduction withheld at once). The base calibrates five parameters
-over honest ranges (``BASE_PARAMETERS``, the truth inside); the catalogue holds ``CATALOGUE``.
+over honest ranges (``BASE_PARAMETERS``, the truth inside); the catalogue holds ``CATALOGUE``. Two base variants:
+``dispersion_off`` (no dispersion in the base, dispersion a catalogue candidate: the truth has none, but the other
+simulator's numerical smearing looks like it) and ``dispersion_calibrated`` (the base calibrates one longitudinal
+dispersivity for every phase over 1e-4..0.05 ft, log scale, as a careful engineer does for any real core, whose
+dispersion is never zero; dispersion is then not a candidate).
 
 Results accumulate in ``out/independent_world/records.jsonl`` (a re-run skips finished runs, so the study can be
 stopped and resumed); the report (``docs/independent_world.md`` + ``.json``) is rebuilt from every record, a
@@ -76,6 +80,11 @@ CASES = {
     "all_three": ((ADS, IPV, RRF), (ADS, IPV, RRF)),
 }
 CATALOGUE = [ADS, IPV, RRF, "dispersion", "capillary_pressure", "shear_thinning", "reversible_polymer_adsorption"]
+DISPERSIVITY = {"names": ["ALPHAL1", "ALPHAL2", "ALPHAL3"], "range": [1.0e-4, 0.05], "scale": "log"}
+VARIANTS = ("dispersion_off", "dispersion_calibrated")
+#: effects the search may add (the first variant ran with the diagnosis's default 2, the second allows the three
+#: withheld ones of ``all_three``)
+MAX_EFFECTS = {"dispersion_off": 2, "dispersion_calibrated": 3}
 SOURCES = {"opm": 100, "upwind_fine": 400}
 BASE_CELLS = 60
 PV_STEP = 0.01
@@ -88,11 +97,20 @@ def truth_effects(case: str) -> dict[str, float]:
     return OFF | {e: (1.0 if e in on else 0.0) for e in (ADS, IPV, RRF)}
 
 
-def base_model(case: str) -> BaseModel:
-    """The diagnosis's base: the truth's mechanisms minus the withheld ones, five calibrated parameters."""
+def base_model(case: str, variant: str = "dispersion_off") -> BaseModel:
+    """The diagnosis's base: the truth's mechanisms minus the withheld ones, five calibrated parameters (six with
+    the calibrated dispersivity of the ``dispersion_calibrated`` variant)."""
     on, withheld = CASES[case]
     effects = OFF | {e: (1.0 if e in on and e not in withheld else 0.0) for e in (ADS, IPV, RRF)}
-    return BaseModel.from_mapping({"cells": BASE_CELLS, "effects": effects, "parameters": BASE_PARAMETERS})
+    parameters = dict(BASE_PARAMETERS)
+    if variant == "dispersion_calibrated":
+        effects["dispersion"] = 1.0
+        parameters["alpha_L"] = DISPERSIVITY
+    return BaseModel.from_mapping({"cells": BASE_CELLS, "effects": effects, "parameters": parameters})
+
+
+def catalogue(variant: str) -> list[str]:
+    return [c for c in CATALOGUE if variant != "dispersion_calibrated" or c != "dispersion"]
 
 
 def clean_run(source: str, case: str, name: str, workdir: Path):
@@ -117,7 +135,7 @@ def corefloods(source: str, case: str, seed: int, workdir: Path) -> dict[str, ob
     return out
 
 
-def run_one(source: str, case: str, seed: int, jobs: int) -> dict:
+def run_one(source: str, case: str, seed: int, jobs: int, variant: str = "dispersion_off") -> dict:
     """Generate one run's data, diagnose it and return its record."""
     from joblib import Parallel
 
@@ -125,10 +143,13 @@ def run_one(source: str, case: str, seed: int, jobs: int) -> dict:
     with tempfile.TemporaryDirectory(prefix="spflow-iw-") as tmp:
         data = corefloods(source, case, seed, Path(tmp))
     with Parallel(n_jobs=jobs) as parallel:
-        diag = diagnose([data[n] for n in CALIBRATION], [data[n] for n in HELDOUT], base_model(case), CATALOGUE,
-                        Options(variables=VARIABLES, pv_step=0.1), parallel=parallel if jobs > 1 else None)
+        diag = diagnose([data[n] for n in CALIBRATION], [data[n] for n in HELDOUT], base_model(case, variant),
+                        catalogue(variant),
+                        Options(variables=VARIABLES, pv_step=0.1, max_effects=MAX_EFFECTS[variant]),
+                        parallel=parallel if jobs > 1 else None)
     result = summary(report_dataset(diag))
-    return {"source": source, "case": case, "seed": seed, "truth": list(CASES[case][1]),
+    return {"source": source, "variant": variant, "max_effects": MAX_EFFECTS[variant], "case": case, "seed": seed,
+            "truth": list(CASES[case][1]),
             "verdict": result["verdict"], "effects": [e["name"] for e in result["effects"]],
             "strengths": {e["name"]: e["strength"] for e in result["effects"]},
             "ambiguity_set": result["ambiguity_set"], "chi2_base": result["fit"]["chi2_base"],
@@ -173,13 +194,14 @@ def write_report(records: list[dict]) -> None:
     lines = ["# Independent-world study of the gap diagnosis", "",
              "Generated by `scripts/independent_world.py` from `out/independent_world/records.jsonl`; the protocol "
              "is in the script's docstring and in `docs/gap.md`.", ""]
-    for source in SOURCES:
-        rows = [r for r in records if r["source"] == source]
+    for source, variant in ((s, v) for s in SOURCES for v in VARIANTS):
+        rows = [r for r in records if r["source"] == source and r.get("variant", VARIANTS[0]) == variant]
         if not rows:
-            lines += [f"## {source}", "", "No runs yet.", ""]
+            lines += [f"## {source}, base {variant}", "", "No runs yet.", ""]
             continue
         m = metrics(rows)
-        lines += [f"## {source} ({m['runs']} runs of {len(CASES) * max(r['seed'] for r in rows)} planned)", "",
+        lines += [f"## {source}, base {variant} ({m['runs']} runs of {len(CASES) * max(r['seed'] for r in rows)} "
+                  "planned)", "",
                   "| truth case | " + " | ".join(columns) + " |", "|---|" + "---|" * len(columns)]
         for case in CASES:
             count = Counter(classify(r) for r in rows if r["case"] == case)
@@ -202,7 +224,9 @@ def write_report(records: list[dict]) -> None:
         lines.append("")
     (ROOT / "docs" / "independent_world.md").write_text("\n".join(lines))
     (ROOT / "docs" / "independent_world.json").write_text(json.dumps(
-        {"records": records, "metrics": {s: metrics([r for r in records if r["source"] == s]) for s in SOURCES}},
+        {"records": records, "metrics": {f"{s}/{v}": metrics([r for r in records if r["source"] == s
+                                                              and r.get("variant", VARIANTS[0]) == v])
+                                         for s in SOURCES for v in VARIANTS}},
         indent=1))
 
 
@@ -211,6 +235,7 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="noise seeds per case and source (1..N)")
     parser.add_argument("--sources", nargs="+", default=list(SOURCES), choices=list(SOURCES))
     parser.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--results", default=str(ROOT / "out" / "independent_world"))
     parser.add_argument("--report-only", action="store_true")
@@ -220,19 +245,19 @@ def main(argv=None) -> int:
     store = results / "records.jsonl"
     records = [json.loads(line) for line in store.read_text().splitlines()] if store.is_file() else []
     if not args.report_only:
-        done = {(r["source"], r["case"], r["seed"]) for r in records}
+        done = {(r["source"], r.get("variant", VARIANTS[0]), r["case"], r["seed"]) for r in records}
         sources = [s for s in args.sources if s != "opm" or shutil.which("flow")]
         if len(sources) < len(args.sources):
             print("OPM Flow ('flow') is not on PATH: the opm source is skipped (apt-get install libopm-simulators-bin)")
-        plan = [(s, c, k) for k in range(1, args.seeds + 1) for c in args.cases for s in sources
-                if (s, c, k) not in done]
+        plan = [(s, v, c, k) for s in sources for v in args.variants for k in range(1, args.seeds + 1)
+                for c in args.cases if (s, v, c, k) not in done]
         print(f"{len(plan)} run(s) to do, {len(done)} done")
-        for source, case, seed in plan:
-            record = run_one(source, case, seed, args.jobs)
+        for source, variant, case, seed in plan:
+            record = run_one(source, case, seed, args.jobs, variant)
             records.append(record)
             with store.open("a") as fh:
                 fh.write(json.dumps(record) + "\n")
-            print(f"{source} {case} seed {seed}: {record['verdict']} {record['effects']} "
+            print(f"{source} {variant} {case} seed {seed}: {record['verdict']} {record['effects']} "
                   f"set {record['ambiguity_set']} ({record['wall_s']:.0f} s)", flush=True)
             write_report(records)
     write_report(records)
