@@ -432,6 +432,7 @@ def _mobilities(st, pr, prm, n):
         pr[L.PCAP, i] = 0.0
         pr[L.LWO, i] = 0.0
         pr[L.DCAP, i] = 0.0
+        pr[L.DPCDS, i] = 0.0
         pr[L.FW, i] = 0.0
         if prm[K.PC0] > 0.0 and pcx > 0:
             sbar_w = pr[L.SBAR + pcx - 1, i]
@@ -445,6 +446,7 @@ def _mobilities(st, pr, prm, n):
             pr[L.FW, i] = lw / lam_t
             if sbar_w > 0.0 and window > 0.0 and sbar_w ** (-1.0 / prm[K.EPC0]) < LEVERETT_FACTOR_MAX:
                 dpc = pc / (prm[K.EPC0] * sbar_w * window)
+                pr[L.DPCDS, i] = dpc
                 pr[L.DCAP, i] = prm[K.PERM_M2] * pr[L.LWO, i] * dpc / (prm[K.UT] * prm[K.LENGTH])
 
         pr[L.F1, i] = f0

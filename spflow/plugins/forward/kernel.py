@@ -10,14 +10,19 @@ Per step (all in pore-volume units, see ``transport``):
 3. pressure: incompressible flow at a constant injection rate with the producer at constant pressure makes the
    total Darcy velocity uniform, so the implicit pressure equation reduces to the integral of ``u / (k lambda_T)``
    over the cells (plus the capillary term when Pc is on) -- ``transport.pressure_profile``;
-4. time step: ``dt = cfl / (max_i speed_i / dx + 2 max_i D_cap,i / dx^2)`` (advective CFL from the local wave-speed
-   bound and, with Pc, the explicit capillary-diffusion limit), capped by a ramp from every slug start (``ramp_step``:
+4. time step: ``dt = cfl dx / max_i speed_i`` (advective CFL from the local wave-speed bound), with Pc at most the
+   step at which the step-start capillary fluxes change a cell's water volume by ``CAPILLARY_DS_MAX``, but not
+   below ``CAPILLARY_MIN_FRACTION`` of the advective step (an accuracy limit: the implicit capillary step needs
+   none for stability; with the explicit reference path
+   ``implicit_pc=False`` the rate gets the diffusion limit ``+ 2 max_i D_cap,i / dx^2`` instead), capped by a ramp
+   from every slug start (``ramp_step``:
    the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
    shortened to land exactly on slug ends and profile times. Output times never shorten a step, so the series do
    not depend on the output grid;
-5. explicit conservative update of the six components with the TVD (or upwind) fluxes; a step that would make a
-   saturation or concentration negative beyond round-off is retried with half the step, and fails as a time-step
-   collapse after 60 halvings;
+5. explicit conservative update of the six components with the TVD (or upwind) fluxes, then, with Pc, the linearly
+   implicit capillary step (``capillary_step``: backward Euler in the carrier saturation, operator split,
+   conservative; ``transport.implicit_capillary_fluxes``); a step that would make a saturation or concentration
+   negative beyond round-off is retried with half the step, and fails as a time-step collapse after 60 halvings;
 6. backward-Euler dispersion of surfactant, polymer, anions and divalent cations (operator split, conservative),
    the four tridiagonal systems solved in one batched sweep (``transport.solve_dispersion``).
 
@@ -27,9 +32,10 @@ GIL, numba has no clock); the failing cell reported is the one that limits the n
 
 Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status`` is a ``state_layout`` error code and
 ``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell; ``stats[N_STATS]`` counts the step
-halvings (``ST_HALVINGS``), the steps whose stable step was set by the capillary-diffusion term rather than the
-wave speed (``ST_CAPILLARY``) and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component,
-the amount in place at the start, injected, produced and in place at the end (PV units), for the mass balance.
+halvings (``ST_HALVINGS``), the steps whose step was set by the capillary term rather than the wave speed
+(``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one)
+and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component, the amount in place at the
+start, injected, produced and in place at the end (PV units), for the mass balance.
 """
 
 import math
@@ -60,6 +66,13 @@ MAX_HALVINGS = 60
 # fractional-flow slope of the model's relative permeabilities), each later one at most RAMP_GROWTH times the last
 RAMP_SPEED = 16.0
 RAMP_GROWTH = 1.25
+# accuracy control of the implicit capillary step (stability needs none): the capillary flux of the step-start
+# state may change a cell's water volume by at most CAPILLARY_DS_MAX per step (the saturation-change limit of
+# production simulators, e.g. ECLIPSE's DSMAX), but it shortens the advective step by at most the factor
+# CAPILLARY_MIN_FRACTION: in a capillary-dominated flood the explicit fluxes overestimate the change the implicit
+# step makes (it stops at capillary equilibrium); docs/forward_model.md has the measured time error
+CAPILLARY_DS_MAX = 0.05
+CAPILLARY_MIN_FRACTION = 0.05
 
 
 @njit(cache=True, error_model="numpy")
@@ -169,6 +182,37 @@ def apply_dispersion(st, n, lamd, jd):
 
 
 @njit(cache=True, error_model="numpy")
+def capillary_step(st, new, pr, prm, n, dx, lam, k_over_ul, ds_adv, work, cap_flux):
+    """The implicit capillary part of a step (operator split after the advective update ``new``): the
+    carrier-saturation change of the advection (water volume change over the carrier's water fraction), then the
+    backward-Euler capillary face fluxes (``transport.implicit_capillary_fluxes``) applied conservatively to
+    ``new``."""
+    for i in range(n):
+        pcx = int(pr[L.PCX, i])
+        c1 = pr[L.C1P + pcx - 1, i] if pcx > 0 else 0.0
+        ds_adv[i] = (new[L.M1, i] - st[L.M1, i]) / c1 if c1 > 0.0 else 0.0
+    cap_flux[:] = 0.0
+    T.implicit_capillary_fluxes(pr, n, dx, lam, k_over_ul, prm[K.PC0], prm[K.EPC0], prm[K.SIGOW], ds_adv, work,
+                                cap_flux)
+    for r in range(6):
+        for i in range(n):
+            new[r, i] -= lam * (cap_flux[r, i + 1] - cap_flux[r, i])
+
+
+@njit(cache=True, error_model="numpy")
+def capillary_change_step(pr, n, dx, k_over_ul, cap_flux):
+    """The step at which the explicit capillary fluxes of the step-start state change some cell's water volume by
+    ``CAPILLARY_DS_MAX`` (infinite if they change none): the accuracy limit of the implicit capillary step.
+    ``cap_flux`` is scratch."""
+    cap_flux[:] = 0.0
+    T.capillary_fluxes(pr, n, dx, k_over_ul, cap_flux)
+    rate = 0.0
+    for i in range(n):
+        rate = max(rate, abs(cap_flux[T.FW, i + 1] - cap_flux[T.FW, i]))
+    return CAPILLARY_DS_MAX * dx / rate if rate > 0.0 else np.inf
+
+
+@njit(cache=True, error_model="numpy")
 def ramp_step(dt_stable, ramp, dx, cfl):
     """The stable step capped by the ramp: ``ramp`` is the cap of the previous step (0 at a slug start, where the
     cap is the CFL step of a wave of speed ``RAMP_SPEED``); returns ``(dt, cap)`` with the cap for the next call.
@@ -198,12 +242,14 @@ def landing_step(dt, t, slug_end, prof_pv, k_prof):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, stop):
+def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, stop, implicit_pc=True):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
     ``flow[2, slugs]`` = Darcy velocity (m/s) and time per PV (s) of each slug (``kernel_inputs.slug_flow``);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
     profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number; ``max_steps`` the step
-    budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step).
+    budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step); ``implicit_pc`` True for the
+    linearly implicit capillary step (the default), False for the explicit capillary fluxes (a reference, with the
+    explicit capillary-diffusion step limit).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
@@ -229,6 +275,12 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     d_conc = np.zeros((N_DISP, n))
     d_coef = np.zeros((N_DISP, n))
     press = np.zeros(n)
+    # capillary step: carrier-saturation change of the advection, solver scratch, capillary face fluxes
+    ds_adv = np.zeros(n)
+    cap_work = np.zeros((5, n + 1))
+    cap_flux = np.zeros((T.NFLUX, n + 1))
+    capillary = prm[K.PC0] > 0.0
+    explicit_pc = capillary and not implicit_pc
     series = np.zeros((R.N_SERIES, n_out))
     prof = np.zeros((N_PROFILE, n_prof, n))
     totals = np.zeros((4, 6))
@@ -311,9 +363,9 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
         for i in range(n):
             if pr[L.SPEED, i] > smax:
                 smax = pr[L.SPEED, i]
-            if pr[L.DCAP, i] > dmax:
+            if explicit_pc and pr[L.DCAP, i] > dmax:
                 dmax = pr[L.DCAP, i]
-            rate_i = pr[L.SPEED, i] / dx + 2.0 * pr[L.DCAP, i] / (dx * dx)
+            rate_i = pr[L.SPEED, i] / dx + (2.0 * pr[L.DCAP, i] / (dx * dx) if explicit_pc else 0.0)
             if rate_i > rmax:
                 rmax = rate_i
                 limiting = i
@@ -329,6 +381,11 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
         if 2.0 * dmax / dx > smax:
             stats[ST_CAPILLARY] += 1.0
         dt_stable = cfl / rate if rate > 0.0 else np.inf
+        if capillary and implicit_pc:
+            dt_cap = max(capillary_change_step(pr, n, dx, k_over_ul, cap_flux), CAPILLARY_MIN_FRACTION * dt_stable)
+            if dt_cap < dt_stable:
+                dt_stable = dt_cap
+                stats[ST_CAPILLARY] += 1.0
         dt, ramp = ramp_step(dt_stable, ramp, dx, cfl)
         if dt < dt_stable:
             stats[ST_RAMP] += 1.0
@@ -344,11 +401,13 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             lam = dt / dx
             T.advective_fluxes(pr, n, tvd, lam, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug], inj[1, slug],
                                inj[2, slug], inj[3, slug], flux)
-            if prm[K.PC0] > 0.0:
+            if explicit_pc:
                 T.capillary_fluxes(pr, n, dx, k_over_ul, flux)
             for r in range(6):
                 for i in range(n):
                     new[r, i] = st[r, i] - lam * (flux[r, i + 1] - flux[r, i])
+            if capillary and implicit_pc:
+                capillary_step(st, new, pr, prm, n, dx, lam, k_over_ul, ds_adv, cap_work, cap_flux)
             bad = first_negative(new, st, n)
             if bad < 0:
                 break

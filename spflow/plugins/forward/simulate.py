@@ -27,6 +27,7 @@ from .schedule import as_schedule
 __all__ = ["simulate", "output_grid", "common_grid"]
 
 _SCHEMES = {"tvd": True, "upwind": False}
+_CAPILLARY = {"implicit": True, "explicit": False}
 _MAX_CELLS = 20000
 
 
@@ -105,7 +106,7 @@ def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cf
 
 def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv_step=0.01, profiles_at=None,
              cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None, pressure_solver=None,
-             max_steps=None, max_wall_s=None):
+             max_steps=None, max_wall_s=None, capillary="implicit"):
     """Run one SP coreflood and return an ``xarray.Dataset``.
 
     Parameters
@@ -136,6 +137,11 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     max_steps, max_wall_s:
         step and wall-time budgets of the run (1-D only; ``budgets`` module): ``None`` is 50 x the expected steps
         ``ceil(total_pv * cells * 4 / cfl)`` and 600 s. Exceeding either raises ``SimulationError``.
+    capillary:
+        time discretisation of the capillary flux when the ``capillary_pressure`` effect is on (1-D only):
+        ``"implicit"`` (default; linearised backward Euler, operator split after the advection, no step limit of
+        its own) or ``"explicit"`` (the reference: forward Euler with the step limit ``dx^2 / (2 max D_cap)``).
+        No effect with Pc off.
 
     Returns
     -------
@@ -145,9 +151,10 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ``oil_overall`` for balances, and ``ift``); attrs with the schedule, grid, scheme, every resolved parameter
     (``param_<NAME>``) and effect strength (``effect_<name>``), the per-component relative mass-balance error,
     ``n_steps``, ``wall_time_s``, the budgets ``max_steps`` and ``max_wall_s`` and the step-control counts
-    ``n_halvings`` (retried steps), ``n_capillary_limited`` (steps whose stable step the capillary-diffusion limit
-    set) and ``n_ramp_limited`` (steps capped by the ramp after a slug start) (and ``slug_rate_ml_min``, the rate
-    of every slug, when a slug sets its own).
+    ``n_halvings`` (retried steps), ``n_capillary_limited`` (steps whose step the capillary term set: the
+    saturation-change limit of the implicit step, the diffusion limit of the explicit one) and ``n_ramp_limited``
+    (steps capped by the ramp after a slug start) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
+    sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
     ``D = C^(C_J) / C_J = a / (1 + b C_J)`` pore volumes with ``a = AD41 + AD42 C_SEP`` and ``b = B4D`` for polymer
@@ -166,9 +173,13 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         if max_steps is not None or max_wall_s is not None:
             raise ParameterError("max_steps and max_wall_s are available in 1-D runs only (cells an integer, no "
                                  "2-D arguments)")
+        if capillary != "implicit":
+            raise ParameterError("capillary is available in 1-D runs only (cells an integer, no 2-D arguments)")
 
         return simulate2d(schedule, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
                           profiles_at=profiles_at, cfl=cfl, **{k: v for k, v in two_d.items() if v is not None})
+    if not isinstance(capillary, str) or capillary not in _CAPILLARY:
+        raise ParameterError(f"capillary must be one of {sorted(_CAPILLARY)}, got {capillary!r}")
     sched, resolved, strengths, registry, cells, pv_step, prof, cfl = _validate(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
@@ -177,14 +188,16 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     start = time.perf_counter()
     with wall_clock_flag(max_wall_s) as stop:
         status, info, n_steps, series, profiles, totals, stats = run_kernel(
-            prm, end_pv, inj, flow, out_pv, prof, cells, _SCHEMES[scheme], cfl, max_steps, stop
+            prm, end_pv, inj, flow, out_pv, prof, cells, _SCHEMES[scheme], cfl, max_steps, stop,
+            _CAPILLARY[capillary]
         )
     wall = time.perf_counter() - start
     if status != L.OK:
         budget = {L.ERR_STEPS: f"max_steps = {max_steps}", L.ERR_WALL: f"max_wall_s = {max_wall_s:g} s"}
         raise SimulationError(status, info, cells, budget.get(status))
 
-    attrs = {"schedule": sched.name, "cells": cells, "scheme": scheme, "cfl": cfl, "pv_step": pv_step,
+    attrs = {"schedule": sched.name, "cells": cells, "scheme": scheme, "capillary": capillary, "cfl": cfl,
+             "pv_step": pv_step,
              "n_steps": int(n_steps), "wall_time_s": wall, "max_steps": max_steps, "max_wall_s": max_wall_s,
              "n_halvings": int(stats[ST_HALVINGS]), "n_capillary_limited": int(stats[ST_CAPILLARY]),
              "n_ramp_limited": int(stats[ST_RAMP])}

@@ -38,7 +38,8 @@ DKR = 40  # dk_rl / dS_l
 NEXP = 43  # Corey exponent n_l (Eq. 2.13)
 SBAR = 46  # normalized saturation (Eq. 1.7), 0 for an absent phase
 WINDOW = 49  # 1 - S1r - S2r - S3r
-NPR = 50
+DPCDS = 50  # |dPc/dS| of the carrier (wetting) phase saturation (Pa), 0 where Pc is off or capped
+NPR = 51
 
 # error codes returned by the kernel
 OK = 0

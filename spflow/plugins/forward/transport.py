@@ -1,4 +1,4 @@
-"""Explicit component transport on the 1-D grid: TVD face fluxes, implicit dispersion, capillary fluxes, pressure.
+"""Component transport on the 1-D grid: explicit TVD face fluxes, implicit dispersion and capillary fluxes, pressure.
 
 Units: pore-volume units throughout -- fluxes are fractions of the total Darcy flux ``u`` (which is uniform along the
 core: incompressible fluids and rock, constant injection rate), distances are ``x/L`` and time is injected pore
@@ -21,11 +21,17 @@ Dispersion (``solve_dispersion``; Eq. 1.9 per phase, summed over phases for each
 Euler in the species' carrier concentration (a tridiagonal M-matrix, unconditionally stable and positivity
 preserving), written back as conservative face fluxes, with no dispersive flux through the injector and producer
 faces (Danckwerts conditions).
+
+Capillary fluxes (Eq. 1.8; the carrier phase moves towards higher ``Pc``, pure oil the other way): linearly
+implicit, backward Euler in the carrier saturation with the mobilities and chord ``dPc/dS`` lagged at the step start
+(``implicit_capillary_fluxes``, operator split after the advection), or explicit (``capillary_fluxes``, the
+reference path, stable only for ``dt <= dx^2 / (2 max D_cap)``).
 """
 
 from numba import njit
 
 from . import state_layout as L
+from .physics.capillary_pressure import brooks_corey_pc
 
 # flux rows: water, oil, surfactant, polymer, anions, divalent
 FW, FO, FS, FP, FA, FD = 0, 1, 2, 3, 4, 5
@@ -130,31 +136,129 @@ def advective_fluxes(pr, n, tvd, courant, e3, e4, inj3, inj4, inj5, inj6, out):
 
 
 @njit(cache=True, error_model="numpy")
+def add_capillary_face(pr, j, g, out):
+    """Add the carrier-phase capillary flux ``g`` (PV units, positive towards cell ``j``) of interior face ``j`` to
+    ``out``: the carrier phase carries the composition of the cell it leaves (water, oil, surfactant, polymer and the
+    salinity of its water), the oleic phase moves ``-g`` of pure oil the other way, so the face's volume fluxes sum
+    to zero."""
+    if g == 0.0:
+        return
+    up = j - 1 if g > 0.0 else j  # the carrier phase leaves this cell; pure oil flows the other way
+    l = 0 if int(pr[L.PCX, up]) == 1 else 2
+    c2 = pr[L.C2P + l, up]
+    c3 = pr[L.C3P + l, up]
+    water = g * (1.0 - c2 - c3)
+    out[FW, j] += water
+    out[FO, j] += g * c2 - g
+    out[FS, j] += g * c3
+    out[FP, j] += g * pr[L.CP, up]
+    out[FA, j] += water * pr[L.C5, up]
+    out[FD, j] += water * pr[L.C6, up]
+
+
+@njit(cache=True, error_model="numpy")
+def capillary_face_mobility(pr, j):
+    """Harmonic mean of the cells' ``lw lo / (lw + lo)`` at interior face ``j`` (0 if either cell has none)."""
+    a = pr[L.LWO, j - 1]
+    b = pr[L.LWO, j]
+    if a <= 0.0 or b <= 0.0:
+        return 0.0
+    return 2.0 * a * b / (a + b)
+
+
+@njit(cache=True, error_model="numpy")
 def capillary_fluxes(pr, n, dx, prm_k_over_ul, out):
     """Add the explicit capillary fluxes (Eq. 1.8; ``Pc = p_oleic - p_carrier``) to the interior faces of ``out``.
 
     The carrier (wetting) phase moves with ``G = k (lw lo/(lw + lo))_face (Pc_{i+1} - Pc_i) / (u L dx)`` (PV units,
-    harmonic face mobility), the oleic phase with ``-G``; each phase carries the composition of the cell it leaves.
-    """
+    harmonic face mobility), the oleic phase with ``-G`` (``add_capillary_face``). Stable for
+    ``dt <= dx^2 / (2 max D_cap)``; the kernel's reference path (``capillary="explicit"``)."""
     for j in range(1, n):
-        a = pr[L.LWO, j - 1]
-        b = pr[L.LWO, j]
-        if a <= 0.0 or b <= 0.0:
+        g = prm_k_over_ul * capillary_face_mobility(pr, j) * (pr[L.PCAP, j] - pr[L.PCAP, j - 1]) / dx
+        add_capillary_face(pr, j, g, out)
+
+
+@njit(cache=True, error_model="numpy")
+def _carrier_pc(pr, i, s, pc0, lambda_b, sigma_ref):
+    """Capillary pressure of cell ``i``'s curve (its residuals, window and IFT, Eq. 1.8) at carrier saturation ``s``
+    (its own Pc where the saturation window is empty)."""
+    window = pr[L.WINDOW, i]
+    if not window > 0.0:
+        return pr[L.PCAP, i]
+    l = int(pr[L.PCX, i]) - 1
+    sbar = pr[L.SBAR + l, i] + (s - pr[L.S1 + l, i]) / window
+    return brooks_corey_pc(pc0, sbar, lambda_b, pr[L.SIGW, i], sigma_ref)
+
+
+@njit(cache=True, error_model="numpy")
+def implicit_capillary_fluxes(pr, n, dx, lam, prm_k_over_ul, pc0, lambda_b, sigma_ref, ds_adv, work, out):
+    """Add the linearly implicit (backward-Euler) capillary fluxes of a step ``lam = dt/dx`` to ``out``.
+
+    Unknown: the carrier saturation ``S_i`` at the end of the step, from ``S_i^a = S_i + ds_adv_i`` after the
+    advection. The face flux ``G_j = a_j (Pc_j(S_j) - Pc_{j-1}(S_{j-1}))`` (``a_j = k (lw lo/(lw + lo))_face /
+    (u L dx)``, ``Pc_i(.)`` cell ``i``'s Brooks-Corey curve) splits exactly into a saturation part and a part from
+    the difference of the two cells' curves (IFT, residuals) at equal saturation:
+    ``G_j = -A_j (S_j - S_{j-1}) + R_j`` with the chord diffusivity
+    ``A_j = -a_j [Pc_j(S_j) - Pc_j(S_{j-1}) + Pc_{j-1}(S_j) - Pc_{j-1}(S_{j-1})] / (2 (S_j - S_{j-1})) >= 0``
+    (``a_j`` times the mean ``|dPc/dS|`` of the cell's tangent ``DPCDS`` where the saturations are equal) and
+    ``R_j = a_j [Pc_j(S_j) - Pc_{j-1}(S_j) + Pc_j(S_{j-1}) - Pc_{j-1}(S_{j-1})] / 2``, both at the step start
+    (lagged coefficients). The saturation part is implicit, the curve part explicit (0 for uniform rock and IFT):
+
+    ``(1 + lam (A_i + A_{i+1})) S_i - lam A_i S_{i-1} - lam A_{i+1} S_{i+1} = S_i^a - lam (R_{i+1} - R_i)``
+
+    (``A_0 = A_n = R_0 = R_n = 0``: no capillary flux through the end faces). The matrix is an M-matrix with unit
+    column sums, so the solve is unconditionally stable and, with ``R = 0``, keeps every ``S_i`` inside the range of
+    the ``S^a`` (a discrete maximum principle); the Thomas algorithm needs no pivoting. The fluxes ``G_j`` go to
+    ``out`` with upwind compositions (``add_capillary_face``): conservative by construction. ``work[5, n + 1]``
+    is scratch."""
+    a = work[0]
+    r = work[1]
+    sa = work[2]
+    cw = work[3]
+    dw = work[4]
+    a[0] = 0.0
+    a[n] = 0.0
+    r[0] = 0.0
+    r[n] = 0.0
+    for i in range(n):
+        pcx = int(pr[L.PCX, i])
+        sa[i] = pr[L.S1 + pcx - 1, i] + ds_adv[i] if pcx > 0 else 0.0
+    for j in range(1, n):
+        mob = prm_k_over_ul * capillary_face_mobility(pr, j) / dx
+        a[j] = 0.0
+        r[j] = 0.0
+        if mob == 0.0:
             continue
-        g = prm_k_over_ul * (2.0 * a * b / (a + b)) * (pr[L.PCAP, j] - pr[L.PCAP, j - 1]) / dx
-        if g == 0.0:
-            continue
-        up = j - 1 if g > 0.0 else j  # the carrier phase leaves this cell; pure oil flows the other way
-        l = 0 if int(pr[L.PCX, up]) == 1 else 2
-        c2 = pr[L.C2P + l, up]
-        c3 = pr[L.C3P + l, up]
-        water = g * (1.0 - c2 - c3)
-        out[FW, j] += water
-        out[FO, j] += g * c2 - g
-        out[FS, j] += g * c3
-        out[FP, j] += g * pr[L.CP, up]
-        out[FA, j] += water * pr[L.C5, up]
-        out[FD, j] += water * pr[L.C6, up]
+        s_l = pr[L.S1 + int(pr[L.PCX, j - 1]) - 1, j - 1]
+        s_r = pr[L.S1 + int(pr[L.PCX, j]) - 1, j]
+        p_rr = pr[L.PCAP, j]
+        p_ll = pr[L.PCAP, j - 1]
+        p_rl = _carrier_pc(pr, j, s_l, pc0, lambda_b, sigma_ref)
+        p_lr = _carrier_pc(pr, j - 1, s_r, pc0, lambda_b, sigma_ref)
+        ds = s_r - s_l
+        if ds != 0.0:
+            a[j] = -mob * 0.5 * ((p_rr - p_rl) + (p_lr - p_ll)) / ds
+        else:
+            a[j] = mob * 0.5 * (pr[L.DPCDS, j - 1] + pr[L.DPCDS, j])
+        r[j] = mob * 0.5 * ((p_rr - p_lr) + (p_rl - p_ll))
+    # forward sweep (cw: modified super-diagonal, dw: modified right-hand side)
+    for i in range(n):
+        diag = 1.0 + lam * (a[i] + a[i + 1])
+        rhs = sa[i] - lam * (r[i + 1] - r[i])
+        upper = -lam * a[i + 1]
+        if i > 0:
+            lower = -lam * a[i]
+            denom = diag - lower * cw[i - 1]
+            cw[i] = upper / denom
+            dw[i] = (rhs - lower * dw[i - 1]) / denom
+        else:
+            cw[i] = upper / diag
+            dw[i] = rhs / diag
+    for i in range(n - 2, -1, -1):
+        dw[i] -= cw[i] * dw[i + 1]
+    for j in range(1, n):
+        g = r[j] - a[j] * (dw[j] - dw[j - 1])
+        add_capillary_face(pr, j, g, out)
 
 
 @njit(cache=True, error_model="numpy")
