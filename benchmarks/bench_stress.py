@@ -90,14 +90,14 @@ def capillary_scale(case: dict) -> float:
     return p["PERM"] * 9.869233e-16 * pc0 / (p["VIS1"] * 1.0e-3 * u * p["LENGTH"])
 
 
-def run_case(case: dict, max_wall_s: float | None = None) -> dict:
+def run_case(case: dict, max_wall_s: float | None = None, capillary: str = "explicit") -> dict:
     """Run one case; returns the measures of the module docstring (``failure``: the reason, or ``""``)."""
     total = BCF_SCHEDULES[case["schedule"]].total_pv
     out = {"schedule": case["schedule"], "cells": case["cells"], "expected": expected_steps(total, case["cells"], 0.5)}
     cpu0, start = time.process_time(), time.perf_counter()
     try:
         ds = simulate(case["schedule"], case["params"], cells=case["cells"], effects=case["effects"], pv_step=0.01,
-                      profiles_at=[total], max_wall_s=max_wall_s)
+                      profiles_at=[total], max_wall_s=max_wall_s, capillary=capillary)
     except SimulationError as err:
         out.update(failure=err.reason, pv=err.pv, cell=err.cell, wall=time.perf_counter() - start,
                    cpu=time.process_time() - cpu0, steps=-1)
@@ -128,6 +128,8 @@ def main() -> None:
     parser.add_argument("--slowest", type=int, default=10, help="slowest draws to list")
     parser.add_argument("--max-wall", type=float, help="wall-time budget per run (s; default: simulate's)")
     parser.add_argument("--save", help="write every case and result as JSON lines to this file")
+    parser.add_argument("--capillary", choices=["explicit", "implicit"], default="explicit",
+                        help="time discretisation of the capillary flux (simulate's option)")
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
     cases = [draw_case(rng) for _ in range(args.n)]
@@ -136,7 +138,7 @@ def main() -> None:
     results = []
     with open(args.save or os.devnull, "w") as fh:  # one JSON line per run as it finishes
         for i, r in enumerate(Parallel(n_jobs=args.jobs, return_as="generator")(
-                delayed(run_case)(c, args.max_wall) for c in cases)):
+                delayed(run_case)(c, args.max_wall, args.capillary) for c in cases)):
             results.append(r)
             fh.write(json.dumps({"index": i, "case": cases[i], "result": r}) + "\n")
             fh.flush()

@@ -1,4 +1,4 @@
-"""The linearly implicit capillary step (kernel ``capillary="implicit"``, the default) against the explicit reference.
+"""The linearly implicit capillary step (``capillary="implicit"``, opt-in) against the explicit scheme (the default).
 
 With the ``capillary_pressure`` effect on, a low-rate waterflood is capillary dominated: the explicit scheme's
 diffusion limit ``dx^2 / (2 D_cap)`` is some 300 times below the advective CFL step at 25 cells. The references
@@ -104,7 +104,7 @@ def test_sp_floods_with_pc_conserve_and_stay_in_bounds(schedule):
     concentrations."""
     prof_at = [1.0, 2.0, 3.0]
     ds = simulate(schedule, {"QINJ": 0.025}, cells=40, pv_step=0.05, profiles_at=prof_at,
-                  effects={"capillary_pressure": 1.0})
+                  effects={"capillary_pressure": 1.0}, capillary="implicit")
     dpv = np.diff(ds.pv.values)
     oil_out = np.cumsum(ds.oil_cut.values[1:] * dpv)
     surf_out = np.cumsum(ds.c_surfactant_out.values[1:] * dpv)
@@ -138,7 +138,7 @@ def _surfactant_injected(schedule, t):
 @pytest.mark.parametrize("schedule", ["BCF1", "BCF2", "BCF3"])
 def test_pc_off_runs_do_not_depend_on_the_capillary_option(schedule):
     """With Pc off (the default) the implicit and explicit paths run the identical step sequence: bit-identical."""
-    a = simulate(schedule, cells=50, pv_step=0.05, profiles_at=[1.0, 2.0])
+    a = simulate(schedule, cells=50, pv_step=0.05, profiles_at=[1.0, 2.0], capillary="implicit")
     b = simulate(schedule, cells=50, pv_step=0.05, profiles_at=[1.0, 2.0], capillary="explicit")
     assert a.attrs["n_steps"] == b.attrs["n_steps"] and a.attrs["n_capillary_limited"] == 0
     for var in a.data_vars:

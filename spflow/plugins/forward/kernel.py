@@ -242,13 +242,13 @@ def landing_step(dt, t, slug_end, prof_pv, k_prof):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, stop, implicit_pc=True):
+def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, stop, implicit_pc=False):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
     ``flow[2, slugs]`` = Darcy velocity (m/s) and time per PV (s) of each slug (``kernel_inputs.slug_flow``);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
     profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number; ``max_steps`` the step
     budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step); ``implicit_pc`` True for the
-    linearly implicit capillary step (the default), False for the explicit capillary fluxes (a reference, with the
+    linearly implicit capillary step (opt-in), False for the explicit capillary fluxes (the default, with the
     explicit capillary-diffusion step limit).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,

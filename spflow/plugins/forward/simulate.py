@@ -106,7 +106,7 @@ def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cf
 
 def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv_step=0.01, profiles_at=None,
              cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None, pressure_solver=None,
-             max_steps=None, max_wall_s=None, capillary="implicit"):
+             max_steps=None, max_wall_s=None, capillary="explicit"):
     """Run one SP coreflood and return an ``xarray.Dataset``.
 
     Parameters
@@ -139,8 +139,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         ``ceil(total_pv * cells * 4 / cfl)`` and 600 s. Exceeding either raises ``SimulationError``.
     capillary:
         time discretisation of the capillary flux when the ``capillary_pressure`` effect is on (1-D only):
-        ``"implicit"`` (default; linearised backward Euler, operator split after the advection, no step limit of
-        its own) or ``"explicit"`` (the reference: forward Euler with the step limit ``dx^2 / (2 max D_cap)``).
+        ``"explicit"`` (default: forward Euler with the step limit ``dx^2 / (2 max D_cap)``) or ``"implicit"``
+        (linearised backward Euler, operator split after the advection, no step limit of its own; opt-in until
+        its inlet transient into connate water is settled: docs/forward_model.md).
         No effect with Pc off.
 
     Returns
@@ -173,7 +174,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         if max_steps is not None or max_wall_s is not None:
             raise ParameterError("max_steps and max_wall_s are available in 1-D runs only (cells an integer, no "
                                  "2-D arguments)")
-        if capillary != "implicit":
+        if capillary != "explicit":
             raise ParameterError("capillary is available in 1-D runs only (cells an integer, no 2-D arguments)")
 
         return simulate2d(schedule, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
