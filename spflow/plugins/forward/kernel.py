@@ -213,6 +213,20 @@ def capillary_change_step(pr, n, dx, k_over_ul, cap_flux):
 
 
 @njit(cache=True, error_model="numpy")
+def _limiting_cell(pr, n, dx, explicit_pc):
+    """``(cell, rate)``: the cell whose step limit (wave speed, plus the explicit capillary diffusion) is the
+    tightest, for the message of a run stopped by a budget."""
+    rmax = 0.0
+    limiting = 0
+    for i in range(n):
+        rate_i = pr[L.SPEED, i] / dx + (2.0 * pr[L.DCAP, i] / (dx * dx) if explicit_pc else 0.0)
+        if rate_i > rmax:
+            rmax = rate_i
+            limiting = i
+    return limiting, rmax
+
+
+@njit(cache=True, error_model="numpy")
 def ramp_step(dt_stable, ramp, dx, cfl):
     """The stable step capped by the ramp: ``ramp`` is the cap of the previous step (0 at a slug start, where the
     cap is the CFL step of a wave of speed ``RAMP_SPEED``); returns ``(dt, cap)`` with the cap for the next call.
@@ -309,6 +323,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     t_prev = 0.0
     t_last = 0.0
     dp_prev = 0.0
+    dp_now = 0.0
     k_out = 0
     k_prof = 0
     slug = 0
@@ -322,7 +337,10 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
         if status != L.OK:
             break
         # ---- records: the series at t = 0 from the initial state, later every output time the last step passed
-        dp_now = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
+        # (the pressure integral only at the two ends of a step that holds an output time)
+        recording = steps == 0 or (k_out < n_out and out_pv[k_out] <= t)
+        if recording:
+            dp_now = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
         if steps == 0:
             while k_out < n_out and out_pv[k_out] <= 0.0:
                 T.advective_fluxes(pr, n, False, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, flux)
@@ -333,7 +351,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
                 series[R.CP_OUT, k_out] = pr[L.CP, n - 1] if pr[L.PCX, n - 1] > 0.0 else 0.0
                 series[R.SAL_OUT, k_out] = pr[L.C5, n - 1]
                 k_out += 1
-        else:
+        elif recording:
             k_out, t_last = R.record_outputs(series, out_pv, k_out, t_prev, t, dp_prev, dp_now, cum_prev, cum,
                                              cum_last, t_last, ooip, pr[L.C5, n - 1], delta)
         while k_prof < n_prof and t >= prof_pv[k_prof]:
@@ -355,28 +373,18 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             status = _properties(st, pr, prm, n, 0.0, info, t)
             if status != L.OK:
                 break
-            dp_now = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
+        if steps >= max_steps or stop[0] != 0:
+            limiting, rmax = _limiting_cell(pr, n, dx, explicit_pc)
+            _fill_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
+            status = L.ERR_STEPS if steps >= max_steps else L.ERR_WALL
+            break
         smax = 0.0
         dmax = 0.0
-        rmax = 0.0
-        limiting = 0
         for i in range(n):
             if pr[L.SPEED, i] > smax:
                 smax = pr[L.SPEED, i]
             if explicit_pc and pr[L.DCAP, i] > dmax:
                 dmax = pr[L.DCAP, i]
-            rate_i = pr[L.SPEED, i] / dx + (2.0 * pr[L.DCAP, i] / (dx * dx) if explicit_pc else 0.0)
-            if rate_i > rmax:
-                rmax = rate_i
-                limiting = i
-        if steps >= max_steps:
-            _fill_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
-            status = L.ERR_STEPS
-            break
-        if stop[0] != 0:
-            _fill_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
-            status = L.ERR_WALL
-            break
         rate = smax / dx + 2.0 * dmax / (dx * dx)
         if 2.0 * dmax / dx > smax:
             stats[ST_CAPILLARY] += 1.0
@@ -391,7 +399,9 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             stats[ST_RAMP] += 1.0
         dt, land, next_stop = landing_step(dt, t, end_pv[slug], prof_pv, k_prof)
         t_prev = t
-        dp_prev = dp_now
+        if k_out < n_out and out_pv[k_out] <= (next_stop if land else t + dt):
+            # an output inside this step: the pressure drop at its start (after any rate step), for the interpolation
+            dp_prev = T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
         for r in range(R.N_CUM):
             cum_prev[r] = cum[r]
 
