@@ -40,6 +40,7 @@ from .format import MAX_PV, TUBE_VARIABLES, VARIABLES, build_coreflood
 from .lab_units import ALLOWED_UNITS, DEFAULT_UNITS, factor
 from .metadata import core_unit
 from .quantities import VELOCITY_UNITS, parse_quantity, velocity_to_rate
+from .text_file import read_utf8_text
 
 __all__ = ["read_csv"]
 
@@ -68,22 +69,6 @@ def _core_value(key: str, value: str, at: str):
     attr, kind = _CORE_KEYS[key]
     x, unit = parse_quantity(value.strip(), kind, at)
     return attr, ((x, unit) if unit in VELOCITY_UNITS else x)
-
-
-def _read_text(path: Path, where: str) -> str:
-    raw = path.read_bytes()
-    if not raw.strip():
-        raise ValueError(f"{where}: empty file; expected a CSV coreflood (header lines, column names, rows)")
-    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        raise ValueError(f"{where}: the file is UTF-16 encoded; save it as UTF-8 (plain CSV) text")
-    nul = raw.find(b"\x00")
-    if nul >= 0:
-        raise ValueError(f"{where}: binary file (a NUL byte at byte {nul}); expected UTF-8 CSV text")
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{where}: not UTF-8 text (undecodable byte at position {exc.start}); expected UTF-8 CSV "
-                         "text") from None
 
 
 def _pairs(text: str, where: str) -> dict[str, str]:
@@ -197,7 +182,8 @@ def read_csv(path, *, units=None, columns=None) -> tuple[xr.Dataset, str | None]
     where = f"file {str(path)!r}"
     if not path.is_file():
         raise ValueError(f"{where}: no such file")
-    lines = _read_text(path, where).splitlines()
+    lines = read_utf8_text(path, where, "UTF-8 CSV text",
+                           "expected a CSV coreflood (header lines, column names, rows)").splitlines()
     header, first = _read_header(lines, where)
     reader = csv.reader(lines[first:])
     names = [n.strip() for n in next(reader)]

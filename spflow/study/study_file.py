@@ -22,6 +22,7 @@ import numpy as np
 from spflow.io import load_coreflood, read_schedule_file
 from spflow.io.metadata import CORE_ATTRS, NOISE_ATTRS, core_bounds, core_unit
 from spflow.io.quantities import VELOCITY_UNITS, parse_quantity, velocity_to_rate
+from spflow.io.text_file import read_utf8_text
 from spflow.plugins.forward.effects import default_registry
 from spflow.plugins.forward.parameters import PARAMETERS, resolve_params
 from spflow.plugins.forward.schedule import Schedule, as_schedule
@@ -50,17 +51,12 @@ def read_study_text(path: Path) -> str:
     where = f"study file {str(path)!r}"
     if not path.is_file():
         raise StudyError(f"{where}: no such file")
-    raw = path.read_bytes()
-    if not raw.strip():
-        raise StudyError(f"{where}: empty file; a study needs at least 'version = {VERSION}', [parameters] and one "
-                         "[[experiment]] (spflow init writes a template)")
-    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        raise StudyError(f"{where}: the file is UTF-16 encoded; save it as UTF-8 TOML")
     try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise StudyError(f"{where}: not UTF-8 text (undecodable byte at position {exc.start}); a study is a UTF-8 "
-                         "TOML file") from None
+        return read_utf8_text(path, where, "UTF-8 TOML (a study file)",
+                              f"a study needs at least 'version = {VERSION}', [parameters] and one [[experiment]] "
+                              "(spflow init writes a template)")
+    except ValueError as exc:
+        raise StudyError(str(exc)) from None
 
 
 def _keys(table, allowed, where: str) -> Mapping:
