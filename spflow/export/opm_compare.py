@@ -77,12 +77,9 @@ def comparison_table(opm: xr.Dataset, ref: xr.Dataset, sched) -> list[dict]:
 
 def plot_comparison(opm: xr.Dataset, ref: xr.Dataset, path, title: str = "") -> Path:
     """Four panels (Δp, oil cut, recovery, effluent polymer) of OPM Flow and spflow; written to ``path``."""
-    import matplotlib
+    from spflow.core.figure import subplots
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
+    fig, axes = subplots(2, 2, figsize=(10, 7), sharex=True)
     panels = (("dp", "pv", "Δp (kPa)", 1e-3), ("oil_cut", "pv_tube", "oil cut", 1.0),
               ("recovery", "pv_tube_end", "recovery (fraction of OOIP)", 1.0),
               ("c_polymer_out", "pv_tube", "effluent polymer (ppm)", 1.0))
@@ -99,7 +96,6 @@ def plot_comparison(opm: xr.Dataset, ref: xr.Dataset, path, title: str = "") -> 
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return path
 
 

@@ -29,16 +29,13 @@ def pipeline(samples: int = 32) -> spflow.Pipeline:
 
 def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     """Write the spread figure and the quantile Dataset; return the lines to print."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from spflow.core.figure import subplots
 
     spread = result["spread"]
     spread.to_netcdf(outdir / "prior_spread.nc")
     qois = [("dp", 1e-3, "Δp (kPa)"), ("oil_cut", 1.0, "oil cut (–)"), ("recovery", 1.0, "recovery (fraction OOIP)")]
     experiments = [str(e) for e in spread["experiment"].values]
-    fig, axes = plt.subplots(len(qois), len(experiments), figsize=(4 * len(experiments), 8), sharex="col")
+    fig, axes = subplots(len(qois), len(experiments), figsize=(4 * len(experiments), 8), sharex="col")
     for j, exp in enumerate(experiments):
         end = float(spread["total_pv"].sel(experiment=exp))
         sel = spread.sel(experiment=exp).sel(pv=slice(0, end)).dropna("pv", subset=["dp_mean"])
@@ -58,7 +55,6 @@ def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     fig.suptitle(f"Prior spread, {spread.attrs['ensemble_size']} LHS samples of the Table 3.2 space")
     fig.tight_layout()
     fig.savefig(outdir / "prior_spread.png", dpi=110)
-    plt.close(fig)
     lines = [f"wrote {outdir / 'prior_spread.png'} and {outdir / 'prior_spread.nc'}"]
     for exp in experiments:
         final = spread["recovery"].sel(experiment=exp).sel(pv=float(spread["total_pv"].sel(experiment=exp)),

@@ -39,11 +39,6 @@ def pipeline(samples: int = 64, cells: int = 100, threshold: float = 0.1, seed: 
 
 def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     """Fig. 3.2 and the per-parameter total indices against the thesis's choice (Table 3.2)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from spflow.plugins.screening.figure import plot_total_indices
 
     screening = result["screening"]
@@ -52,7 +47,6 @@ def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     fig = plot_total_indices(screening, qois, title=f"Fig. 3.2: Sobol' screening on {experiment} "
                                                     f"({screening.attrs['runs']} runs)")
     fig.savefig(outdir / "fig_3_2_sobol_screening.png", dpi=110)
-    plt.close(fig)
     lines = [f"{screening.attrs['runs']} simulations; selection: {screening.attrs['selection_rule']}",
              f"{'sub-model':28s} {'param':8s} {'ST recovery':>12s} {'ST max dp':>12s}  selected  thesis"]
     for name in screening["param"].values:

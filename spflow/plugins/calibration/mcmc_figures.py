@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from spflow.core.figure import subplots
+
 from .diagnostics import autocorrelation, geweke_intervals, independent_series
 
 __all__ = ["trace_figure", "autocorrelation_figure", "prior_posterior_figure", "geweke_figure", "predictive_figure"]
@@ -24,19 +26,10 @@ __all__ = ["trace_figure", "autocorrelation_figure", "prior_posterior_figure", "
 _QOI_LABELS = {"dp": ("Δp (kPa)", 1e-3), "oil_cut": ("oil cut (–)", 1.0), "recovery": ("recovery (–)", 1.0)}
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _grid(n: int, plt, width: float = 3.2, height: float = 2.4):
+def _grid(n: int, width: float = 3.2, height: float = 2.4):
     cols = min(3, n)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False)
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     return fig, axes.flat
@@ -54,19 +47,17 @@ def _label(posterior: xr.Dataset, name: str) -> str:
     return f"{name} [{unit}]" if unit and unit != "-" else name
 
 
-def _save(fig, plt, path: Path, title: str) -> Path:
+def _save(fig, path: Path, title: str) -> Path:
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path
 
 
 def trace_figure(posterior: xr.Dataset, path: Path) -> Path:
-    plt = _pyplot()
     sub = _independent(posterior)
     names = [str(n) for n in posterior["param"].values]
-    fig, axes = _grid(len(names), plt)
+    fig, axes = _grid(len(names))
     step = int(posterior.attrs.get("thin", 1))
     for ax, name in zip(axes, names):
         for c in range(sub.sizes["chain"]):
@@ -75,13 +66,12 @@ def trace_figure(posterior: xr.Dataset, path: Path) -> Path:
         ax.set_ylim(float(posterior["lower"].sel(param=name)), float(posterior["upper"].sel(param=name)))
         ax.set_title(_label(posterior, name), fontsize=9)
         ax.set_xlabel("step after burn-in", fontsize=8)
-    return _save(fig, plt, path, f"Traces ({posterior.attrs.get('sampler', '')}, one line per independent chain)")
+    return _save(fig, path, f"Traces ({posterior.attrs.get('sampler', '')}, one line per independent chain)")
 
 
 def autocorrelation_figure(posterior: xr.Dataset, path: Path, max_lag: int = 60) -> Path:
-    plt = _pyplot()
     names = [str(n) for n in posterior["param"].values]
-    fig, axes = _grid(len(names), plt)
+    fig, axes = _grid(len(names))
     theta = posterior["theta"].transpose("chain", "draw", "param").values
     lag = min(max_lag, theta.shape[1] - 1)
     for ax, (k, name) in zip(axes, enumerate(names)):
@@ -90,13 +80,12 @@ def autocorrelation_figure(posterior: xr.Dataset, path: Path, max_lag: int = 60)
         ax.set_ylim(-0.2, 1.0)
         ax.set_title(_label(posterior, name), fontsize=9)
         ax.set_xlabel(f"lag (kept draws, thin {posterior.attrs.get('thin', 1)})", fontsize=8)
-    return _save(fig, plt, path, "Autocorrelation of the kept draws (averaged over chains)")
+    return _save(fig, path, "Autocorrelation of the kept draws (averaged over chains)")
 
 
 def prior_posterior_figure(posterior: xr.Dataset, path: Path, truth: dict[str, float] | None = None) -> Path:
-    plt = _pyplot()
     names = [str(n) for n in posterior["param"].values]
-    fig, axes = _grid(len(names), plt)
+    fig, axes = _grid(len(names))
     for ax, name in zip(axes, names):
         lo, hi = float(posterior["lower"].sel(param=name)), float(posterior["upper"].sel(param=name))
         ax.hist(posterior["theta"].sel(param=name).values.ravel(), bins=50, range=(lo, hi), density=True,
@@ -108,14 +97,13 @@ def prior_posterior_figure(posterior: xr.Dataset, path: Path, truth: dict[str, f
         ax.set_title(_label(posterior, name), fontsize=9)
         ax.set_yticks([])
     axes[0].legend(fontsize=7)
-    return _save(fig, plt, path, "Prior (uniform on the box) and posterior")
+    return _save(fig, path, "Prior (uniform on the box) and posterior")
 
 
 def geweke_figure(posterior: xr.Dataset, path: Path) -> Path:
-    plt = _pyplot()
     series = independent_series(posterior)
     names = [str(n) for n in posterior["param"].values]
-    fig, axes = _grid(len(names), plt)
+    fig, axes = _grid(len(names))
     step = int(posterior.attrs.get("thin", 1))
     for ax, (k, name) in zip(axes, enumerate(names)):
         for chain in series[:, :, k]:
@@ -125,7 +113,7 @@ def geweke_figure(posterior: xr.Dataset, path: Path) -> Path:
         ax.set_ylim(-4, 4)
         ax.set_title(_label(posterior, name), fontsize=9)
         ax.set_xlabel("first step of the sub-chain", fontsize=8)
-    return _save(fig, plt, path, "Geweke z (spectral variance) of sub-chains; shaded |z| < 2")
+    return _save(fig, path, "Geweke z (spectral variance) of sub-chains; shaded |z| < 2")
 
 
 def predictive_figure(bands: xr.Dataset, observations: xr.Dataset | None, experiments: list[str], path: Path,
@@ -133,12 +121,11 @@ def predictive_figure(bands: xr.Dataset, observations: xr.Dataset | None, experi
                       title: str = "") -> Path:
     """Bands between the outer quantile levels of ``bands`` (``posterior_predictive`` output) per QoI (rows) and
     experiment (columns); ``prior``, a ``quantiles`` output over prior draws, adds the prior band."""
-    plt = _pyplot()
     lo_q, hi_q = float(bands.attrs["band_low"]), float(bands.attrs["band_high"])
     mid_q = sorted(float(q) for q in bands["quantile"].values)[len(bands["quantile"]) // 2]
     pct = round(100 * (hi_q - lo_q))
-    fig, axes = plt.subplots(len(variables), len(experiments), squeeze=False, sharex="col",
-                             figsize=(max(4.2 * len(experiments), 7.0), 3.0 * len(variables)))
+    fig, axes = subplots(len(variables), len(experiments), squeeze=False, sharex="col",
+                         figsize=(max(4.2 * len(experiments), 7.0), 3.0 * len(variables)))
     for j, exp in enumerate(experiments):
         end = float(bands["total_pv"].sel(experiment=exp)) if "total_pv" in bands else np.inf
         for i, var in enumerate(variables):
@@ -170,4 +157,4 @@ def predictive_figure(bands: xr.Dataset, observations: xr.Dataset | None, experi
             if i == len(variables) - 1:
                 ax.set_xlabel("injected pore volumes (PV)")
     axes[0, 0].legend(fontsize=7, loc="best")
-    return _save(fig, plt, path, title or "Posterior predictive")
+    return _save(fig, path, title or "Posterior predictive")

@@ -19,22 +19,15 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib import colormaps
 
+from spflow.core.figure import subplots
 from spflow.plugins.calibration.nsga2_history import HV_REFERENCE
 
 __all__ = ["plot_fronts", "plot_history_match", "plot_parameter_ranges"]
 
 _QOIS = (("dp", 1e-3, "pressure drop (kPa)"), ("recovery", 1.0, "cumulative recovery (fraction OOIP)"),
          ("oil_cut", 1.0, "oil cut (-)"))
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _label(calibration: xr.Dataset, k: int) -> str:
@@ -45,12 +38,11 @@ def _label(calibration: xr.Dataset, k: int) -> str:
 
 def plot_fronts(calibration: xr.Dataset, path: str | Path) -> Path:
     """Fig. 3.10 (fronts at the snapshot generations, log axes) and the run's history; returns the PNG path."""
-    plt = _pyplot()
     from matplotlib import ticker
 
-    fig, (ax, hx) = plt.subplots(1, 2, figsize=(11, 4.4), gridspec_kw={"width_ratios": [1.3, 1]})
+    fig, (ax, hx) = subplots(1, 2, figsize=(11, 4.4), gridspec_kw={"width_ratios": [1.3, 1]})
     snaps = calibration["snapshot"].values
-    colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(snaps)))
+    colors = colormaps["viridis"](np.linspace(0.0, 0.9, len(snaps)))
     for color, g in zip(colors, snaps):
         f = calibration["front_objectives"].sel(snapshot=g).dropna("member").values
         f = f[np.argsort(f[:, 0])]
@@ -78,7 +70,6 @@ def plot_fronts(calibration: xr.Dataset, path: str | Path) -> Path:
     hx.set_title("history")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return Path(path)
 
 
@@ -93,9 +84,8 @@ def plot_history_match(responses: xr.Dataset, design: xr.Dataset, observations: 
     """Figs. 3.11-3.13 for ``experiment``: simulator ``responses`` (forward stage, dims sample, experiment, pv) at the
     Pareto sets of a ``pareto_design`` ``design`` (its ``generation`` coordinate splits the samples; the first
     generation is drawn green, the last red) over the data; returns the PNG path."""
-    plt = _pyplot()
     generation = design["generation"].values
-    fig, axes = plt.subplots(1, len(_QOIS), figsize=(14, 4))
+    fig, axes = subplots(1, len(_QOIS), figsize=(14, 4))
     for ax, (name, scale, label) in zip(axes, _QOIS):
         for g, color in ((generation.min(), "tab:green"), (generation.max(), "tab:red")):
             da = _series(responses.isel(sample=np.flatnonzero(generation == g)), name, experiment) * scale
@@ -111,17 +101,15 @@ def plot_history_match(responses: xr.Dataset, design: xr.Dataset, observations: 
     fig.suptitle(f"{experiment}: simulator at the Pareto set vs data")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return Path(path)
 
 
 def plot_parameter_ranges(calibration: xr.Dataset, path: str | Path, truth: dict[str, float] | None = None) -> Path:
     """Fig. 3.14: prior, calibrated (Pareto) and noise-consistent range of each parameter on the prior scaled to
     [0, 1]; returns the PNG path."""
-    plt = _pyplot()
     names = [str(n) for n in calibration["param"].values]
     lo, hi = calibration["prior_lower"].values, calibration["prior_upper"].values
-    fig, ax = plt.subplots(figsize=(8, 0.55 * len(names) + 1.7))
+    fig, ax = subplots(figsize=(8, 0.55 * len(names) + 1.7))
     y = np.arange(len(names))[::-1]
     ax.barh(y, np.ones(len(names)), left=0.0, height=0.8, color="tab:blue", alpha=0.15, label="prior (Table 3.2)")
     level = calibration.attrs["confidence_level"]
@@ -141,5 +129,4 @@ def plot_parameter_ranges(calibration: xr.Dataset, path: str | Path, truth: dict
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return Path(path)

@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from spflow.core.figure import subplots
+
 __all__ = ["write_figures"]
 
 _LABELS = {"dp": ("Δp (kPa)", 1e-3), "oil_cut": ("oil cut (–)", 1.0), "recovery": ("recovery (–)", 1.0),
@@ -64,11 +66,11 @@ def _row_label(r, m: int, exp: str, qoi: str) -> str:
     return f"{qoi}\n~{str(r['xcorr_channel'].values[i]).removesuffix('_ppm')}@{float(r['xcorr_lag'][m, i]):.1f}"
 
 
-def _heatmap(r, path, plt):
+def _heatmap(r, path):
     qois = _qois(r)
     exps = list(r["experiment"].values)
-    fig, axes = plt.subplots(2, len(exps), figsize=(4.8 * len(exps) + 1.2, 5.2), squeeze=False,
-                             gridspec_kw={"wspace": 0.45, "hspace": 0.35})
+    fig, axes = subplots(2, len(exps), figsize=(4.8 * len(exps) + 1.2, 5.2), squeeze=False,
+                         gridspec_kw={"wspace": 0.45, "hspace": 0.35})
     mesh = None
     for m, model in enumerate(r["model"].values):
         for i, exp in enumerate(exps):
@@ -90,13 +92,12 @@ def _heatmap(r, path, plt):
     fig.suptitle(f"Where the model misses — verdict: {r.attrs['verdict']}; final model {r.attrs['final_model']}",
                  fontsize=10)
     fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
 
 
-def _angles(r, path, plt):
+def _angles(r, path):
     names = list(r["candidate"].values)
     cos = r["fingerprint_cos"].values
-    fig, ax = plt.subplots(figsize=(1.0 + 0.62 * len(names), 0.6 + 0.55 * len(names)))
+    fig, ax = subplots(figsize=(1.0 + 0.62 * len(names), 0.6 + 0.55 * len(names)))
     im = ax.imshow(cos, cmap="RdBu_r", vmin=-1, vmax=1)
     for i in range(len(names)):
         for j in range(len(names)):
@@ -108,14 +109,13 @@ def _angles(r, path, plt):
     fig.colorbar(im, ax=ax, label="cos angle of projected fingerprints")
     ax.set_title("A-priori ambiguity (|cos| ≥ 0.9: near-collinear)", fontsize=10)
     fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
 
 
 def _fmt(x, spec=".2f"):
     return "–" if not np.isfinite(x) else format(float(x), spec)
 
 
-def _table(r, path, plt):
+def _table(r, path):
     rows = []
     for step in range(r.sizes["step"]):
         order = np.argsort(-np.nan_to_num(r["screen_z"].values[step], nan=-np.inf))
@@ -133,7 +133,7 @@ def _table(r, path, plt):
                          ("yes" if r["passes"][step, j] else "no") if shortlisted else ""])
     cols = ["added to", "candidate", "base s", "screen z", "SNR", "absorbed", "fitted s", "ΔELPD ± SE",
             "gap closed", "passes"]
-    fig, ax = plt.subplots(figsize=(11, 0.6 + 0.32 * (len(rows) + 1)))
+    fig, ax = subplots(figsize=(11, 0.6 + 0.32 * (len(rows) + 1)))
     ax.axis("off")
     table = ax.table(cellText=rows, colLabels=cols, loc="center", cellLoc="center")
     table.auto_set_font_size(False)
@@ -144,13 +144,12 @@ def _table(r, path, plt):
     ax.set_title(f"Candidates (score: {r.attrs['score_kind']}) — verdict: {r.attrs['verdict']}; accepted: {steps}",
                  fontsize=10)
     fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
 
 
-def _predictions(r, path, plt, z):
+def _predictions(r, path, z):
     qois = _qois(r)
     exps = list(r["experiment"].values)
-    fig, axes = plt.subplots(len(qois), len(exps), figsize=(4.2 * len(exps), 2.3 * len(qois)), squeeze=False,
+    fig, axes = subplots(len(qois), len(exps), figsize=(4.2 * len(exps), 2.3 * len(qois)), squeeze=False,
                              sharex="col")
     for i, exp in enumerate(exps):
         for k, q in enumerate(qois):
@@ -175,13 +174,12 @@ def _predictions(r, path, plt, z):
     axes[0, 0].legend(fontsize=7, loc="best")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
-def _pointwise(r, path, plt):
+def _pointwise(r, path):
     keys = [k for k in r.data_vars if k.startswith("elpd_difference_")]
     exps = [i for i in range(r.sizes["experiment"]) if any(np.isfinite(r[k].values[i]).any() for k in keys)]
-    fig, axes = plt.subplots(len(keys), max(len(exps), 1), figsize=(max(6.5, 4.2 * len(exps)), 2.3 * len(keys)),
+    fig, axes = subplots(len(keys), max(len(exps), 1), figsize=(max(6.5, 4.2 * len(exps)), 2.3 * len(keys)),
                              squeeze=False, sharex="col")
     for col, i in enumerate(exps):
         for row, key in enumerate(keys):
@@ -201,24 +199,19 @@ def _pointwise(r, path, plt):
                  " green helps, red hurts", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def write_figures(report: xr.Dataset, outdir) -> list[Path]:
     """Write the figures of ``report`` into ``outdir``; returns their paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from scipy.stats import norm
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     paths = {name: outdir / f"{name}.png" for name in ("gap_heatmap", "fingerprint_angles", "candidates",
                                                          "predictions", "pointwise_scores")}
-    _heatmap(report, paths["gap_heatmap"], plt)
-    _angles(report, paths["fingerprint_angles"], plt)
-    _table(report, paths["candidates"], plt)
-    _predictions(report, paths["predictions"], plt, norm.ppf(0.5 + float(report.attrs["interval"]) / 2))
-    _pointwise(report, paths["pointwise_scores"], plt)
+    _heatmap(report, paths["gap_heatmap"])
+    _angles(report, paths["fingerprint_angles"])
+    _table(report, paths["candidates"])
+    _predictions(report, paths["predictions"], norm.ppf(0.5 + float(report.attrs["interval"]) / 2))
+    _pointwise(report, paths["pointwise_scores"])
     return list(paths.values())

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from spflow.core.figure import subplots
 from spflow.plugins.forward.physics.shear_thinning import half_shear_rate
 
 from .adsorption_fit import isotherm
@@ -26,23 +27,10 @@ def _estimates(fit: xr.Dataset) -> dict[str, float]:
     return {str(p): float(v) for p, v in zip(fit["param"].values, fit["estimate"].values)}
 
 
-def _subplots(*args, **kwargs):
-    """``plt.subplots`` on the headless Agg backend (imported lazily: no GUI side effect on import)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(*args, **kwargs)
-
-
 def _save(fig, path) -> Path:
-    import matplotlib.pyplot as plt
-
     path = Path(path)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return path
 
 
@@ -66,7 +54,7 @@ def polymer_rheology_figure(fit: xr.Dataset, path) -> Path:
     and viscosity vs shear rate at the first brine (c). Points: per-sweep Meter fits / readings; lines: joint fit."""
     est = {n: _estimates(fit)[n] for n in RHEOLOGY_NAMES}
     mu_w, cse1 = fit.attrs["water_viscosity_cp"], fit.attrs["cse1_meq_ml"]
-    fig, axes = _subplots(1, 3, figsize=(15, 4.6))
+    fig, axes = subplots(1, 3, figsize=(15, 4.6))
     cp_line = np.linspace(0.0, fit["sweep_c_polymer"].values.max() * 1.1, 100)
     for k, (c51, c61) in enumerate(_brines(fit)):
         sel = (fit["sweep_anions"].values == c51) & (fit["sweep_divalent"].values == c61)
@@ -106,7 +94,7 @@ def half_shear_rate_figure(fit: xr.Dataset, path) -> Path:
     """Fig. 2.3: per-sweep half shear rates vs concentration per brine, with the Eq. 2.5 fit."""
     est = _estimates(fit)
     cse1 = fit.attrs["cse1_meq_ml"]
-    fig, ax = _subplots(figsize=(6.5, 4.6))
+    fig, ax = subplots(figsize=(6.5, 4.6))
     cp_line = np.linspace(fit["sweep_c_polymer"].values.min() * 0.8, fit["sweep_c_polymer"].values.max() * 1.1, 100)
     for k, (c51, c61) in enumerate(_brines(fit)):
         sel = (fit["sweep_anions"].values == c51) & (fit["sweep_divalent"].values == c61)
@@ -124,7 +112,7 @@ def half_shear_rate_figure(fit: xr.Dataset, path) -> Path:
 def polymer_coreflood_figure(fit: xr.Dataset, path) -> Path:
     """Fig. 2.4: pressure history of the single-phase polymer coreflood, data and fitted simulator."""
     est = _estimates(fit)
-    fig, ax = _subplots(figsize=(8, 4.6))
+    fig, ax = subplots(figsize=(8, 4.6))
     pv, to_kpa = fit["pv"].values, 1e-3
     ax.plot(pv, fit["dp"].values * to_kpa, "o", ms=3, color="k", label="lab data")
     ax.plot(pv, fit["dp_fit"].values * to_kpa, color="C3",
@@ -146,7 +134,7 @@ def adsorption_figure(fit: xr.Dataset, path) -> Path:
     factor = fit.attrs["pv_factor"]
     conc, sal = fit["concentration"].values, fit["salinity"].values
     unit = fit["concentration"].attrs.get("units", "")
-    fig, ax = _subplots(figsize=(6.5, 4.6))
+    fig, ax = subplots(figsize=(6.5, 4.6))
     c_line = np.linspace(0.0, conc.max() * 1.05, 200)
     for k, tds in enumerate(np.unique(sal)):
         sel = sal == tds
@@ -162,7 +150,7 @@ def adsorption_figure(fit: xr.Dataset, path) -> Path:
 def tracer_figure(fit: xr.Dataset, path) -> Path:
     """Fig. 2.9: (a) linear TDS-EC calibration, (b) effluent conductivity vs PV with the Ogata-Banks fit."""
     alpha, slope = fit["estimate"].values
-    fig, axes = _subplots(1, 2, figsize=(12, 4.6))
+    fig, axes = subplots(1, 2, figsize=(12, 4.6))
     tds = fit["calibration_tds"].values
     t_line = np.linspace(0.0, tds.max() * 1.1, 50)
     axes[0].plot(fit["calibration_conductivity"].values, tds, "o", label="calibration brines")

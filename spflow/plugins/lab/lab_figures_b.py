@@ -5,13 +5,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from spflow.plugins.lab.fit_result import fit_interval  # noqa: E402
+from spflow.plugins.lab.fit_result import fit_interval
 
 __all__ = ["phase_behaviour_figure", "ift_figure", "me_viscosity_figure", "desaturation_figure"]
 
@@ -25,7 +23,7 @@ def _estimates_text(fit, level: float = 0.95) -> str:
 
 def _figure():
     """A figure with one axes and room on the right for the estimates box."""
-    fig = plt.figure(figsize=(9.5, 4.6))
+    fig = Figure(figsize=(9.5, 4.6))
     ax = fig.add_axes((0.08, 0.12, 0.6, 0.78))
     return fig, ax
 
@@ -37,7 +35,6 @@ def _finish(fig, ax, fit, path) -> Path:
     ax.grid(True, which="both", alpha=0.25)
     path = Path(path)
     fig.savefig(path, dpi=130)
-    plt.close(fig)
     return path
 
 
@@ -84,7 +81,7 @@ def me_viscosity_figure(fit, path) -> Path:
     the fitted Eq. 2.11."""
     fig, ax = _figure()
     levels = fit["curve_surfactant"].values
-    colors = plt.cm.viridis(np.linspace(0.0, 0.85, levels.size))
+    colors = colormaps["viridis"](np.linspace(0.0, 0.85, levels.size))
     surf = fit["surfactant"].values
     for level, color in zip(levels, colors):
         ax.plot(fit["curve_ratio"], fit["curve_viscosity"].sel(curve_surfactant=level), color=color,

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+from matplotlib import rcParams
+
+from spflow.core.figure import subplots
 
 __all__ = ["THESIS_SYMBOLS", "plot_total_indices"]
 
@@ -36,15 +39,13 @@ def plot_total_indices(screening: xr.Dataset, qois: list[str] | None = None, *, 
     standard deviation of every QoI over the design the group was screened in: in ``per_group`` mode the indices are
     shares of that group's own variance, so this is what makes panels comparable. Returns the Figure.
     """
-    import matplotlib.pyplot as plt
-
     if qois is None:
         qois = [str(q) for q, v in zip(screening["qoi"].values, screening["qoi_variable"].values) if v in _QOI_LABELS]
     groups = list(dict.fromkeys(screening["group"].values.tolist()))
     nrows = -(-len(groups) // ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(3.3 * ncols, 2.9 * nrows), squeeze=False)
+    fig, axes = subplots(nrows, ncols, figsize=(3.3 * ncols, 2.9 * nrows), squeeze=False)
     width = 0.8 / len(qois)
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colours = rcParams["axes.prop_cycle"].by_key()["color"]
     for ax, group in zip(axes.flat, groups):
         sub = screening.isel(param=np.flatnonzero(screening["group"].values == group))
         x = np.arange(sub.sizes["param"])

@@ -19,24 +19,16 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from spflow.core.figure import subplots
+
 from .slug_schedule import REFERENCE, SlugReference, slug_schedule
 
 __all__ = ["plot_price_paths", "plot_front_evolution", "plot_knee_design"]
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def plot_price_paths(results: Mapping[str, xr.Dataset], path: str | Path) -> Path:
     """Fig. 4.6: the stored price paths of each result (e.g. {"positive drift": ..., "negative drift": ...})."""
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, len(results), figsize=(5.2 * len(results), 3.8), sharey=True, squeeze=False)
+    fig, axes = subplots(1, len(results), figsize=(5.2 * len(results), 3.8), sharey=True, squeeze=False)
     for ax, (label, ds) in zip(axes[0], results.items()):
         t = ds["time"].values
         for row in ds["price_path"].values:
@@ -51,7 +43,6 @@ def plot_price_paths(results: Mapping[str, xr.Dataset], path: str | Path) -> Pat
     fig.suptitle("Fig. 4.6: samples of the stochastic oil price model (Eq. 4.12)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return Path(path)
 
 
@@ -99,9 +90,8 @@ def _uncertainty_layer(ax, ds: xr.Dataset, snapshot: int, n_levels: int = 10) ->
 
 def plot_front_evolution(ds: xr.Dataset, path: str | Path, title: str) -> Path:
     """Figs. 4.7-4.8: projected fronts after the kept iterations and, last, the final front with its uncertainty."""
-    plt = _pyplot()
     snaps = ds["snapshot"].values
-    fig, axes = plt.subplots(1, len(snaps), figsize=(4.6 * len(snaps), 4.2), squeeze=False)
+    fig, axes = subplots(1, len(snaps), figsize=(4.6 * len(snaps), 4.2), squeeze=False)
     chosen = ds["chosen_at"].values
     for ax, k in zip(axes[0], snaps):
         proj = ds["snapshot_projected"].sel(snapshot=k).values
@@ -129,7 +119,6 @@ def plot_front_evolution(ds: xr.Dataset, path: str | Path, title: str) -> Path:
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return Path(path)
 
 
@@ -141,11 +130,10 @@ def _band(ax, pv, values, color, label):
 
 def plot_knee_design(ds: xr.Dataset, path: str | Path, title: str) -> Path:
     """Figs. 4.9-4.10: schedule and responses of the knee design over the posterior draws."""
-    plt = _pyplot()
     x = ds["knee_design"].values
     reference = SlugReference.from_json(ds.attrs["reference_flood"]) if "reference_flood" in ds.attrs else REFERENCE
     sched = slug_schedule(*x, total_pv=ds.attrs["total_pv"], reference=reference)
-    fig, axes = plt.subplots(2, 2, figsize=(10, 7))
+    fig, axes = subplots(2, 2, figsize=(10, 7))
     ax = axes[0, 0]
     edges = np.concatenate([[0.0], np.cumsum([s.pv for s in sched.slugs])])
     for field, color, label in (("salinity_ppm", "tab:gray", "salinity (TDS)"),
@@ -180,5 +168,4 @@ def plot_knee_design(ds: xr.Dataset, path: str | Path, title: str) -> Path:
                  f"{np.median(ds['knee_max_dp'].values):.1f} kPa", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return Path(path)

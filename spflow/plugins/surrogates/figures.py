@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from spflow.core.figure import subplots
 from spflow.plugins.forward.schedule import as_schedule
 
 from .figure_data import band_data, error_history, moment_data, scatter_data
@@ -31,15 +32,6 @@ __all__ = ["convergence_figure", "proxy_vs_simulator_figure", "moments_figure", 
 _DISPLAY = {("dp", "Pa"): (1e-3, "Δp", "kPa"), ("recovery", "1"): (1.0, "recovery", "fraction OOIP")}
 #: Scalar QoI of each variable in Figs. 3.4-3.5 (max Δp; the final value of anything else).
 _SCALAR = {"dp": "max"}
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _axis(variable: str, unit: str) -> tuple[float, str]:
@@ -68,7 +60,6 @@ def _save(fig, path: str | Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    _pyplot().close(fig)
     return path
 
 
@@ -81,8 +72,7 @@ def convergence_figure(history: xr.Dataset | Mapping[str, xr.Dataset | Sequence[
         history = {"adaptive_pce": history}
     histories = {label: error_history(h) for label, h in history.items()}
     variables = list(dict.fromkeys(str(v) for h in histories.values() for v in h["variable"].values))
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, len(variables), figsize=(max(6.5, 5 * len(variables)), 3.9), sharey=True, squeeze=False)
+    fig, axes = subplots(1, len(variables), figsize=(max(6.5, 5 * len(variables)), 3.9), sharey=True, squeeze=False)
     for ax, v in zip(axes[0], variables):
         for (label, h), style in zip(histories.items(), ("-", "--", ":", "-.")):
             if v not in h["variable"].values:
@@ -112,8 +102,7 @@ def proxy_vs_simulator_figure(surrogate: xr.Dataset | Mapping[str, xr.Dataset], 
     other variables) with its R² (the same numbers as ``surrogate_validation``'s ``r2_max``/``r2_final``)."""
     data = {label: scatter_data(ds, design, responses, variables=variables, experiment=experiment)
             for label, ds in _labelled(surrogate).items()}
-    plt = _pyplot()
-    fig, axes = plt.subplots(len(variables), len(data), figsize=(4.3 * len(data), 4 * len(variables)), squeeze=False)
+    fig, axes = subplots(len(variables), len(data), figsize=(4.3 * len(data), 4 * len(variables)), squeeze=False)
     for j, (label, d) in enumerate(data.items()):
         for i, v in enumerate(variables):
             ax, stats = axes[i, j], d.sel(variable=v)
@@ -148,8 +137,7 @@ def moments_figure(surrogate: xr.Dataset | Mapping[str, xr.Dataset], responses: 
     mean and variance curves (Eq. 3.15, as in Fig. 3.7)."""
     data = {label: moment_data(ds, responses, design=design, variables=variables, experiment=experiment)
             for label, ds in _labelled(surrogate).items()}
-    plt = _pyplot()
-    fig, axes = plt.subplots(len(variables), 2, figsize=(10.5, 3.5 * len(variables)), sharex=True, squeeze=False)
+    fig, axes = subplots(len(variables), 2, figsize=(10.5, 3.5 * len(variables)), sharex=True, squeeze=False)
     for k, (label, d) in enumerate(data.items()):
         for i, v in enumerate(variables):
             scale, name = _axis(v, d[f"{v}_proxy_mean"].attrs["units"])
@@ -181,8 +169,7 @@ def band_figure(surrogate: xr.Dataset, design: xr.Dataset, responses: xr.Dataset
     Table 2.5 schedule). Titles give the fraction of all validation values inside the band."""
     d = band_data(surrogate, design, responses, n_show=n_show, reference=reference, variables=variables,
                   experiment=experiment)
-    plt = _pyplot()
-    fig, axes = plt.subplots(2, len(variables), figsize=(5.5 * len(variables), 7.5), sharex=True, squeeze=False,
+    fig, axes = subplots(2, len(variables), figsize=(5.5 * len(variables), 7.5), sharex=True, squeeze=False,
                              gridspec_kw={"height_ratios": [3, 2]})
     slug_ends = np.cumsum([slug.pv for slug in as_schedule(experiment if schedule is None else schedule).slugs])[:-1]
     name_of = surrogate_label(surrogate)
