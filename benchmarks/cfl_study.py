@@ -23,14 +23,15 @@ import numpy as np
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from spflow.plugins.forward.kernel import run_kernel  # noqa: E402
-from spflow.plugins.forward.simulate import _validate, kernel_arguments  # noqa: E402
+from spflow.plugins.forward.run_arguments import validate_run  # noqa: E402
+from spflow.plugins.forward.simulate import kernel_arguments  # noqa: E402
 
 SCHEDULES = ("BCF1", "BCF2", "BCF3")
 
 
 def run(schedule: str, cells: int, courant: float) -> tuple[np.ndarray, int, float, float]:
     """``(series, steps, kernel CPU seconds, worst mass-balance residual)`` of one TVD run at any Courant number."""
-    sched, resolved, strengths, _, cells, pv_step, prof, _ = _validate(schedule, None, cells, None, "tvd", 0.01,
+    sched, resolved, strengths, _, cells, pv_step, prof, _ = validate_run(schedule, None, cells, None, "tvd", 0.01,
                                                                        None, 0.5)
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     start = time.process_time()

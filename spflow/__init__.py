@@ -6,8 +6,6 @@ result under a provenance key and runs independent work in parallel. See ``docs/
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
-
 from spflow.core.errors import (
     CacheError,
     CacheIntegrityWarning,
@@ -28,16 +26,12 @@ from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry, register_plugin, reset_registry, unregister_plugin
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
+from spflow.core.version import __version__
 from spflow.plugins.forward.effects import Effect
 from spflow.plugins.forward.simulate import simulate
 from spflow.io import load_coreflood
 from spflow.study import Study, StudyError, bundled_study, load_study
 from spflow import synthetic
-
-try:
-    __version__ = version("spflow")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
 
 __all__ = [
     "CacheError",

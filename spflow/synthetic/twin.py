@@ -13,6 +13,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from spflow.core.version import __version__
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.forward.simulate import simulate
@@ -21,12 +22,6 @@ from .measurement import measure
 from .noise_model import NoiseModel
 
 __all__ = ["make_coreflood"]
-
-
-def _spflow_version() -> str:
-    import spflow
-
-    return spflow.__version__
 
 
 def write_twins(directory, truth_params, *, noise, seed, cells=100, experiments=("BCF1", "BCF2", "BCF3")) -> list[str]:
@@ -67,6 +62,6 @@ def make_coreflood(schedule, truth_params=None, *, effects=None, noise=None, see
     clean = simulate(sched, truth_params, cells=cells, effects=effects, pv_step=pv_step)
     ds = measure(clean, noise, int(seed), experiment=experiment or sched.name,
                  source="synthetic twin (spflow.synthetic.make_coreflood)", schedule=schedule_json(sched))
-    ds.attrs.update(generator="spflow.synthetic.make_coreflood", seed=int(seed), spflow_version=_spflow_version(),
+    ds.attrs.update(generator="spflow.synthetic.make_coreflood", seed=int(seed), spflow_version=__version__,
                     simulation_cells=int(cells), simulation_pv_step=float(pv_step))
     return ds

@@ -11,7 +11,8 @@ from spflow.core.errors import ParameterError
 from spflow.plugins.forward import state_layout as L
 from spflow.plugins.forward.errors import SimulationError
 from spflow.plugins.forward.kernel import run_kernel
-from spflow.plugins.forward.simulate import _validate, kernel_arguments, simulate
+from spflow.plugins.forward.run_arguments import validate_run
+from spflow.plugins.forward.simulate import kernel_arguments, simulate
 
 WATER = [{"pv": 0.5, "salinity_ppm": 9400.0}]
 
@@ -49,8 +50,8 @@ def test_step_budget_of_one_step_stops_after_one_step():
 
 
 def test_wall_flag_stops_the_kernel_before_the_next_step():
-    sched, resolved, strengths, _, cells, pv_step, prof, cfl = _validate(WATER, None, 20, None, "tvd", 0.01, None,
-                                                                         0.5)
+    sched, resolved, strengths, _, cells, pv_step, prof, cfl = validate_run(WATER, None, 20, None, "tvd", 0.01,
+                                                                             None, 0.5)
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     stop = np.ones(1, dtype=np.int64)
     status, info, steps, *_ = run_kernel(prm, end_pv, inj, flow, out_pv, prof, cells, True, cfl, 10**9, stop)

@@ -32,7 +32,7 @@ def test_y_faces_take_the_limited_value_of_their_upwind_stencil(tvd):
     st[L.M1] = 1.0
     st[L.RK] = 1.0
     st[L.M5] = salinity.ravel()
-    assert KR._properties(st, pr, prm, n, 0.0, np.zeros(KR.N_INFO), 0.0) == L.OK
+    assert KR.update_properties(st, pr, prm, n, 0.0, np.zeros(KR.N_INFO), 0.0) == L.OK
     assert np.all(pr[L.F1] == 1.0) and np.all(pr[L.V1] == 1.0)  # water only: anion flux = face salinity
     faces = np.arange(1, ny)
     vy = np.zeros((ny + 1, nx))

@@ -76,15 +76,20 @@ CAPILLARY_MIN_FRACTION = 0.05
 
 
 @njit(cache=True, error_model="numpy")
-def _properties(st, pr, prm, n, dt_s, info, t):
+def update_properties(st, pr, prm, n, dt_s, info, t):
+    """The properties ``pr`` of every cell from the state ``st`` (:func:`cell_properties`, shared with the 2-D
+    kernel); on failure the failing cell's state is written to ``info`` (:func:`fill_failure_info`). Returns the status
+    code (``state_layout.OK`` or the failure)."""
     code, i = cell_properties(st, pr, prm, n, dt_s)
     if code != L.OK:
-        _fill_info(info, t, i, st, pr, 0.0)
+        fill_failure_info(info, t, i, st, pr, 0.0)
     return code
 
 
 @njit(cache=True, error_model="numpy")
-def _fill_info(info, t, i, st, pr, dt):
+def fill_failure_info(info, t, i, st, pr, dt):
+    """What ``SimulationError`` reports of a failed run: time ``t``, cell ``i``, its six conserved amounts, its
+    three saturations and the step ``dt``, into ``info[:12]``."""
     info[0] = t
     info[1] = i
     for r in range(6):
@@ -95,7 +100,7 @@ def _fill_info(info, t, i, st, pr, dt):
 
 
 @njit(cache=True, error_model="numpy")
-def _first_nonfinite(st, n):
+def first_nonfinite_cell(st, n):
     """First cell with a non-finite conserved amount (rows M1..M6), or -1 (a branch-free scan first: the search
     only runs after a failure)."""
     finite = True
@@ -112,7 +117,9 @@ def _first_nonfinite(st, n):
 
 
 @njit(cache=True, error_model="numpy")
-def _record_profile(st, pr, prm, n, prof, kp, press):
+def record_profile(st, pr, prm, n, prof, kp, press):
+    """Profile ``kp`` (saturations, polymer, surfactant, salinity, pressure, adsorbed surfactant per cell) into
+    ``prof``; the pressure from the current properties (``press`` is scratch)."""
     T.pressure_profile(pr, n, prm[K.LENGTH] / n, prm[K.UT], prm[K.PERM_M2], press)
     for i in range(n):
         prof[P_SW, kp, i] = pr[L.S1, i]
@@ -331,9 +338,9 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     steps = 0
     dt_s = 0.0
     # the first pass sets the lagged trapping and shear inputs (k|grad p|, carrier flux) of the initial state
-    status = _properties(st, pr, prm, n, 0.0, info, t)
+    status = update_properties(st, pr, prm, n, 0.0, info, t)
     while status == L.OK:
-        status = _properties(st, pr, prm, n, dt_s, info, t)
+        status = update_properties(st, pr, prm, n, dt_s, info, t)
         if status != L.OK:
             break
         # ---- records: the series at t = 0 from the initial state, later every output time the last step passed
@@ -355,7 +362,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             k_out, t_last = R.record_outputs(series, out_pv, k_out, t_prev, t, dp_prev, dp_now, cum_prev, cum,
                                              cum_last, t_last, ooip, pr[L.C5, n - 1], delta)
         while k_prof < n_prof and t >= prof_pv[k_prof]:
-            _record_profile(st, pr, prm, n, prof, k_prof, press)
+            record_profile(st, pr, prm, n, prof, k_prof, press)
             k_prof += 1
         if t >= t_end:
             break
@@ -370,12 +377,12 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             prm[K.UT] = flow[K.FLOW_UT, slug]
             prm[K.T_PV] = flow[K.FLOW_T_PV, slug]
             k_over_ul = prm[K.PERM_M2] / (prm[K.UT] * prm[K.LENGTH])
-            status = _properties(st, pr, prm, n, 0.0, info, t)
+            status = update_properties(st, pr, prm, n, 0.0, info, t)
             if status != L.OK:
                 break
         if steps >= max_steps or stop[0] != 0:
             limiting, rmax = _limiting_cell(pr, n, dx, explicit_pc)
-            _fill_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
+            fill_failure_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
             status = L.ERR_STEPS if steps >= max_steps else L.ERR_WALL
             break
         smax = 0.0
@@ -425,7 +432,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             land = False
             stats[ST_HALVINGS] += 1.0
         if bad >= 0:
-            _fill_info(info, t, bad, st, pr, dt)
+            fill_failure_info(info, t, bad, st, pr, dt)
             status = L.ERR_COLLAPSE
             break
 
@@ -451,9 +458,9 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
         t = next_stop if land else t + dt
         dt_s = dt * prm[K.T_PV]
         steps += 1
-        bad = _first_nonfinite(st, n)
+        bad = first_nonfinite_cell(st, n)
         if bad >= 0:
-            _fill_info(info, t, bad, st, pr, dt)
+            fill_failure_info(info, t, bad, st, pr, dt)
             status = L.ERR_NONFINITE
 
     for r in range(6):

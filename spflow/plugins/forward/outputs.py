@@ -9,7 +9,7 @@ from . import kernel as KR
 from . import output_records as R
 from . import units
 
-__all__ = ["build_dataset", "COMPONENTS"]
+__all__ = ["build_dataset", "COMPONENTS", "PROFILE_VARIABLES"]
 
 #: component order of the kernel's mass-balance totals
 COMPONENTS = ("water", "oil", "surfactant", "polymer", "anions", "divalent")
@@ -29,7 +29,8 @@ _SERIES = (
      units.anions_to_tds_ppm(1.0)),
 )
 
-_PROFILES = (
+#: ``(name, row of the kernel's profile array, units, long_name, scale)`` of every profile variable (1-D and 2-D)
+PROFILE_VARIABLES = (
     ("sw", KR.P_SW, "1", "aqueous-phase (water) saturation", 1.0),
     ("so", KR.P_SO, "1", "oleic-phase saturation", 1.0),
     ("sme", KR.P_SME, "1", "microemulsion saturation", 1.0),
@@ -68,7 +69,7 @@ def build_dataset(series, profiles, totals, out_pv, prof_pv, cells, attrs) -> xr
         )
     coords = {"pv": ("pv", out_pv, {"units": "PV", "long_name": "injected pore volumes"})}
     if prof_pv.size:
-        for name, row, unit, long_name, scale in _PROFILES:
+        for name, row, unit, long_name, scale in PROFILE_VARIABLES:
             data[name] = xr.Variable(
                 ("profile_pv", "x"), profiles[row] * scale, {"units": unit, "long_name": long_name}
             )

@@ -6,7 +6,6 @@ Dataset; nothing loops over cells or steps here.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -18,41 +17,11 @@ from . import state_layout as L
 from .errors import SimulationError
 from .budgets import resolve_budgets, wall_clock_flag
 from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_RAMP, run_kernel
-from .checks import check_number
 from .kernel_inputs import build_kernel_params, slug_flow
 from .outputs import build_dataset
-from .parameters import resolve_params
-from .schedule import as_schedule
+from .run_arguments import CAPILLARY, SCHEMES, common_grid, output_grid, validate_run
 
 __all__ = ["simulate", "output_grid", "common_grid"]
-
-_SCHEMES = {"tvd": True, "upwind": False}
-_CAPILLARY = {"implicit": True, "explicit": False}
-_MAX_CELLS = 20000
-
-
-def output_grid(total_pv: float, pv_step: float) -> np.ndarray:
-    """``0, pv_step, 2 pv_step, ...`` up to and including ``total_pv`` (appended if not on the step grid)."""
-    n = int(math.floor(total_pv / pv_step + 1.0e-9))
-    grid = np.arange(n + 1, dtype=np.float64) * pv_step
-    if total_pv - grid[-1] > 1.0e-9 * max(1.0, total_pv):
-        grid = np.append(grid, total_pv)
-    else:
-        grid[-1] = total_pv
-    return grid
-
-
-def common_grid(totals, pv_step: float) -> tuple[np.ndarray, list[np.ndarray]]:
-    """The union of several experiments' output grids and, per experiment, the positions of its own grid in it.
-
-    Experiments of different length share the step points; each one's off-step end point (e.g. 4.23 PV) is a
-    point of the union that the others leave NaN. Points are matched rounded to 1e-9 PV, so ``41 * 0.1`` and an
-    end point of exactly 4.1 are one point; the union holds the rounded values.
-    """
-    grids = [np.round(output_grid(float(t), pv_step), 9) for t in totals]
-    union = np.unique(np.concatenate(grids))
-    return union, [np.searchsorted(union, g) for g in grids]
-
 
 def kernel_arguments(sched, resolved, strengths, pv_step):
     """``(prm, end_pv, inj, flow, out_pv)`` of ``run_kernel`` for a validated schedule, resolved parameters and
@@ -66,42 +35,6 @@ def kernel_arguments(sched, resolved, strengths, pv_step):
     end_pv[-1] = out_pv[-1]
     flow = slug_flow(resolved, sched.rates_ml_min(resolved["QINJ"]))
     return build_kernel_params(resolved, strengths), end_pv, inj, flow, out_pv
-
-
-def _check_cells(cells):
-    if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or not 3 <= cells <= _MAX_CELLS:
-        raise ParameterError(f"cells must be an integer in [3, {_MAX_CELLS}], got {cells!r}")
-    return int(cells)
-
-
-def _validate(schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl, check_cells=_check_cells):
-    sched = as_schedule(schedule)
-    total = sched.total_pv
-    cells = check_cells(cells)
-    if scheme not in _SCHEMES:
-        raise ParameterError(f"scheme must be one of {sorted(_SCHEMES)}, got {scheme!r}")
-    pv_step = check_number("pv_step", pv_step, 0.0, total, lower_open=True)
-    if total / pv_step > 1.0e6:
-        raise ParameterError(f"pv_step = {pv_step!r} gives more than 1e6 output points; allowed [{total / 1e6:g}, "
-                             f"{total:g}] PV for this schedule")
-    cfl = check_number("cfl", cfl, 0.0, 0.5 if scheme == "tvd" else 1.0, lower_open=True)
-    if profiles_at is None:
-        prof = np.zeros(0)
-    else:
-        values = np.atleast_1d(np.asarray(profiles_at, dtype=object))
-        # tolerate the round-off of the slug sum (0.6 + 0.5 + 0.7 = 1.7999999999999998)
-        limit = total * (1.0 + 1e-12)
-        prof = np.array([check_number(f"profiles_at[{i}]", v, 0.0, limit)
-                         for i, v in enumerate(values)], dtype=np.float64)
-        prof = np.unique(np.minimum(prof, total))
-    registry = E.default_registry()
-    strengths = registry.resolve(effects)
-    resolved = resolve_params(params)
-    for name, s in strengths.items():
-        effect = registry[name]
-        if name not in E.BUILTIN_NAMES and effect.transform_params is not None:
-            resolved = resolve_params(effect.transform_params(dict(resolved), s))
-    return sched, resolved, strengths, registry, cells, pv_step, prof, cfl
 
 
 def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv_step=0.01, profiles_at=None,
@@ -179,9 +112,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
 
         return simulate2d(schedule, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
                           profiles_at=profiles_at, cfl=cfl, **{k: v for k, v in two_d.items() if v is not None})
-    if not isinstance(capillary, str) or capillary not in _CAPILLARY:
-        raise ParameterError(f"capillary must be one of {sorted(_CAPILLARY)}, got {capillary!r}")
-    sched, resolved, strengths, registry, cells, pv_step, prof, cfl = _validate(
+    if not isinstance(capillary, str) or capillary not in CAPILLARY:
+        raise ParameterError(f"capillary must be one of {sorted(CAPILLARY)}, got {capillary!r}")
+    sched, resolved, strengths, registry, cells, pv_step, prof, cfl = validate_run(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
     max_steps, max_wall_s = resolve_budgets(max_steps, max_wall_s, sched.total_pv, cells, cfl)
@@ -189,8 +122,8 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     start = time.perf_counter()
     with wall_clock_flag(max_wall_s) as stop:
         status, info, n_steps, series, profiles, totals, stats = run_kernel(
-            prm, end_pv, inj, flow, out_pv, prof, cells, _SCHEMES[scheme], cfl, max_steps, stop,
-            _CAPILLARY[capillary]
+            prm, end_pv, inj, flow, out_pv, prof, cells, SCHEMES[scheme], cfl, max_steps, stop,
+            CAPILLARY[capillary]
         )
     wall = time.perf_counter() - start
     if status != L.OK:

@@ -57,7 +57,7 @@ def _lw_factor(courant, speed):
 
 
 @njit(cache=True, error_model="numpy")
-def _cell_fluxes(pr, i, out, j):
+def upwind_cell_fluxes(pr, i, out, j):
     """First-order fluxes of face ``j`` from cell ``i``."""
     fw = 0.0
     fo = 0.0
@@ -92,7 +92,7 @@ def advective_fluxes(pr, n, tvd, courant, e3, e4, inj3, inj4, inj5, inj6, out):
     for j in range(1, n + 1):
         i = j - 1
         if not tvd or i == 0 or j == n:
-            _cell_fluxes(pr, i, out, j)
+            upwind_cell_fluxes(pr, i, out, j)
             continue
         w = _lw_factor(courant, pr[L.WAVE, i])
         f0 = van_leer_face(pr[L.F1, i - 1], pr[L.F1, i], pr[L.F1, i + 1], w)
@@ -100,7 +100,7 @@ def advective_fluxes(pr, n, tvd, courant, e3, e4, inj3, inj4, inj5, inj6, out):
         f2 = van_leer_face(pr[L.F1 + 2, i - 1], pr[L.F1 + 2, i], pr[L.F1 + 2, i + 1], w)
         tot = f0 + f1 + f2
         if not tot > 1.0e-12:
-            _cell_fluxes(pr, i, out, j)
+            upwind_cell_fluxes(pr, i, out, j)
             continue
         fw = 0.0
         fo = 0.0

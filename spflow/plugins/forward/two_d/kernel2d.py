@@ -102,14 +102,14 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
     k_out = k_prof = slug = steps = 0
     dt_s = 0.0
     field = None
-    status = KR._properties(st, pr, prm, n, 0.0, info, t)
+    status = KR.update_properties(st, pr, prm, n, 0.0, info, t)
     if status == L.OK:
         field = solver.solve(pr[L.LAMT].reshape(ny, nx))
         _localise_lagged(st, field, kappa_flat)
     since_solve = 0
     land = True  # solve at the first step (t = 0 is a landed time)
     while status == L.OK:
-        status = KR._properties(st, pr, prm, n, dt_s, info, t)
+        status = KR.update_properties(st, pr, prm, n, dt_s, info, t)
         if status != L.OK:
             break
         if since_solve + 1 >= pressure_every or land or (k_out < n_out and out_pv[k_out] <= t):
@@ -140,7 +140,7 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
             k_out, t_last = R.record_outputs(series, out_pv, k_out, t_prev, t, dp_prev, dp_now, cum_prev, cum,
                                              cum_last, t_last, ooip, pr[L.C5, nx - 1::nx].mean(), delta)
         while k_prof < n_prof and t >= prof_pv[k_prof]:
-            KR._record_profile(st, pr, prm, n, maps, k_prof, press)
+            KR.record_profile(st, pr, prm, n, maps, k_prof, press)
             maps[KR.P_PRES, k_prof] = field.p.ravel() * pa_per_scaled  # the 2-D pressure, not the 1-D integral
             k_prof += 1
         if t >= t_end:
@@ -167,7 +167,7 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
             dt *= 0.5
             land = False
         if bad >= 0:
-            KR._fill_info(info, t, bad, st, pr, dt)
+            KR.fill_failure_info(info, t, bad, st, pr, dt)
             status = L.ERR_COLLAPSE
             break
         KR.polymer_storage(st, new, pr, prm[K.EPHI4], n, d_stor)
@@ -188,9 +188,9 @@ def run_kernel2d(prm, end_pv, inj, out_pv, prof_pv, grid: Grid2D, tvd, cfl, alph
         t = next_stop if land else t + dt
         dt_s = dt * prm[K.T_PV]
         steps += 1
-        bad = KR._first_nonfinite(st, n)
+        bad = KR.first_nonfinite_cell(st, n)
         if bad >= 0:
-            KR._fill_info(info, t, bad, st, pr, dt)
+            KR.fill_failure_info(info, t, bad, st, pr, dt)
             status = L.ERR_NONFINITE
 
     totals[3] = st[:6].sum(axis=1) / n

@@ -23,9 +23,9 @@ from .. import kernel_inputs as K
 from .. import state_layout as L
 from ..errors import SimulationError
 from ..kernel_inputs import build_kernel_params
-from ..outputs import _PROFILES, build_dataset
+from ..outputs import PROFILE_VARIABLES, build_dataset
 from ..checks import check_number
-from ..simulate import _SCHEMES, _validate, output_grid
+from ..run_arguments import SCHEMES, output_grid, validate_run
 from .grid2d import Grid2D
 from .kernel2d import run_kernel2d
 from .pressure2d import METHODS
@@ -93,7 +93,7 @@ def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, eff
     ``pressure_every``, ``pressure_solver``, ``n_pressure_solves``, ``n_pressure_factorizations``,
     ``n_pressure_iterations`` (PCG), ``pressure_time_s`` (wall time in the pressure solves).
     """
-    sched, resolved, strengths, registry, (nx, ny), pv_step, prof, cfl = _validate(
+    sched, resolved, strengths, registry, (nx, ny), pv_step, prof, cfl = validate_run(
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl, check_cells=_check_cells_2d
     )
     for i, slug in enumerate(sched.slugs):
@@ -125,7 +125,7 @@ def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, eff
     start = time.perf_counter()
     with threadpool_limits(1, "blas"):  # the PCG's vector operations are too small for threaded BLAS (pressure2d)
         status, info, n_steps, solver, series, maps, totals, _ = run_kernel2d(
-            prm, end_pv, inj, out_pv, prof, grid, _SCHEMES[scheme], cfl, alpha_t_ratio, int(pressure_every),
+            prm, end_pv, inj, out_pv, prof, grid, SCHEMES[scheme], cfl, alpha_t_ratio, int(pressure_every),
             pressure_solver
         )
     wall = time.perf_counter() - start
@@ -150,7 +150,7 @@ def simulate2d(schedule, params=None, *, cells=(100, 20), permeability=None, eff
     ds["permeability"] = (("y", "x"), perm, {"units": "mD", "long_name": "absolute permeability"})
     if prof.size:
         ds = ds.assign_coords(profile_pv=("profile_pv", prof, {"units": "PV", "long_name": "profile time"}))
-        for name, row, unit, long_name, scale in _PROFILES:
+        for name, row, unit, long_name, scale in PROFILE_VARIABLES:
             ds[name] = (("profile_pv", "y", "x"), maps[row].reshape(prof.size, ny, nx) * scale,
                         {"units": unit, "long_name": long_name})
     for name, s in strengths.items():

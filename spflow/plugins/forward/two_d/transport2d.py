@@ -44,7 +44,7 @@ def advective_fluxes_2d(pr, nx, ny, ux, vy, tvd, lam_x, lam_y, e3, e4, inj3, inj
         T.advective_fluxes(pr[:, s:s + nx], nx, tvd, lam_x * mean_u, e3, e4, inj3, inj4, inj5, inj6, row_flux)
         for j in range(1, nx):
             if ux[iy, j] < 0.0:
-                T._cell_fluxes(pr, s + j, row_flux, j)
+                T.upwind_cell_fluxes(pr, s + j, row_flux, j)
     down = np.empty((T.NFLUX, ny + 1))
     for ix in range(nx):
         mean_v = 0.0
