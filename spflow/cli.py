@@ -6,7 +6,7 @@
     spflow status PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
     spflow report PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
                            [--out DIR]
-    spflow list [pipelines|stages|effects|params]
+    spflow list [pipelines|stages|effects|surrogates|params]
     spflow clean [--cache DIR] [--tmp]
     spflow diagnose --observations FILE [FILE ...] [--heldout FILE ...] --base CONFIG [--catalogue NAMES]
                     [--out DIR] [--jobs N]
@@ -193,6 +193,12 @@ def _cmd_list(args: argparse.Namespace) -> int:
         for name in sorted(registry.effects):
             effect = registry.effects[name]
             print(f"  {name} (default strength {effect.default_strength}): {effect.description}")
+    if what in ("surrogates", "all"):
+        print("surrogate kinds:")
+        for kind in sorted(registry.surrogate_kinds):
+            cls = registry.surrogate_kinds[kind]
+            doc = (cls.__doc__ or "").strip().splitlines()[0] if cls.__doc__ else ""
+            print(f"  {kind} (from {registry.providers['surrogate:' + kind]}): {doc}")
     if what in ("params", "all"):
         from spflow.plugins.forward.parameters import parameter_table
 
@@ -245,8 +251,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE",
                        help="override a node's parameter (VALUE parsed as JSON, else a string); repeatable")
 
-    p_list = sub.add_parser("list", help="list pipelines, registered stages, effects and forward-model parameters")
-    p_list.add_argument("what", nargs="?", choices=["pipelines", "stages", "effects", "params", "all"], default="all")
+    p_list = sub.add_parser("list", help="list pipelines, registered stages, effects, surrogate kinds and forward-model parameters")
+    p_list.add_argument("what", nargs="?", choices=["pipelines", "stages", "effects", "surrogates", "params", "all"], default="all")
 
     p_clean = sub.add_parser("clean", help="delete the cache (only what spflow stores; refuses a non-cache directory)")
     p_clean.add_argument("--tmp", action="store_true", help="only delete unfinished temporary entries")

@@ -44,3 +44,13 @@ class SpflowHookSpecs:
 
         .. versionadded:: 0.1
         """
+
+    @hookspec
+    def spflow_register_surrogate_kinds(self, register):
+        """Contribute surrogate kinds: ``register(SurrogateSubclass)`` for each, a subclass of
+        :class:`spflow.plugins.surrogates.contract.Surrogate` with a unique class attribute ``kind``. A stored surrogate
+        whose ``attrs["surrogate"]`` names that kind is then rebuilt by its ``from_dataset`` wherever spflow loads one
+        (:func:`~spflow.plugins.surrogates.contract.load_surrogate`: validation, calibration, MCMC, figures).
+
+        .. versionadded:: 0.1
+        """

@@ -31,7 +31,7 @@ from typing import Any
 import pluggy
 
 from . import hashing
-from .errors import PipelineError, PluginError, PluginWarning
+from .errors import PipelineError, PluginError, PluginWarning, SchemaError
 from .hookspecs import PROJECT_NAME, SpflowHookSpecs
 from .stage import Stage
 
@@ -45,10 +45,11 @@ _RUNTIME_PLUGINS: dict[str, object] = {}
 
 @dataclass
 class Registry:
-    """Everything the plugins contributed: stages, effects (forward model) and who provided each."""
+    """Everything the plugins contributed: stages, effects (forward model), surrogate kinds and who provided each."""
 
     stages: dict[str, type[Stage]] = field(default_factory=dict)
     effects: dict[str, Any] = field(default_factory=dict)
+    surrogate_kinds: dict[str, type] = field(default_factory=dict)
     providers: dict[str, str] = field(default_factory=dict)
 
     def stage(self, name: str) -> type[Stage]:
@@ -57,6 +58,14 @@ class Registry:
         except KeyError:
             known = ", ".join(sorted(self.stages)) or "none"
             raise PipelineError(f"unknown stage {name!r}; registered stages: {known}") from None
+
+    def surrogate_kind(self, kind: str) -> type:
+        """The class that rebuilds stored surrogates of ``kind``; ``SchemaError`` naming the registered kinds."""
+        try:
+            return self.surrogate_kinds[kind]
+        except KeyError:
+            raise SchemaError(f"unknown surrogate kind {kind!r}; registered kinds: {sorted(self.surrogate_kinds)} "
+                              "(a plugin adds one through the hook spflow_register_surrogate_kinds)") from None
 
 
 def _provider_name(obj: Any) -> str:
@@ -181,9 +190,22 @@ def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Re
         reg.effects[name] = effect
         reg.providers["effect:" + name] = _provider_name(effect)
 
+    def register_surrogate_kind(cls: Any) -> None:
+        kind = getattr(cls, "kind", None)
+        if not (isinstance(cls, type) and callable(getattr(cls, "from_dataset", None))):
+            raise PluginError(f"spflow_register_surrogate_kinds: expected a Surrogate subclass, got {cls!r}")
+        if not isinstance(kind, str) or not kind:
+            raise PluginError(f"surrogate class {cls.__qualname__} must set a non-empty class attribute 'kind'")
+        if kind in reg.surrogate_kinds and reg.surrogate_kinds[kind] is not cls:
+            raise PluginError(f"surrogate kind {kind!r} registered twice: by {reg.providers['surrogate:' + kind]} "
+                              f"and by {_provider_name(cls)}")
+        reg.surrogate_kinds[kind] = cls
+        reg.providers["surrogate:" + kind] = _provider_name(cls)
+
     _call_hook(pm, third_party, "spflow_register_stages", register_stage)
     _call_hook(pm, third_party, "spflow_register_effects", register_effect)
     _call_hook(pm, third_party, "spflow_register_hashers", hashing.register_hasher)
+    _call_hook(pm, third_party, "spflow_register_surrogate_kinds", register_surrogate_kind)
     return reg
 
 

@@ -1,4 +1,4 @@
-"""The built-in plugin: registers spflow's own stages and effects through the public hooks."""
+"""The built-in plugin: registers spflow's own stages, effects and surrogate kinds through the public hooks."""
 
 from __future__ import annotations
 
@@ -37,6 +37,16 @@ def spflow_register_stages(register):
                   Diagnose, FitPolymerRheology, FitPolymerCoreflood, FitAdsorption, FitTracer, FitPhaseBehaviour,
                   FitIFT, FitMEViscosity, FitDesaturation, Priors, SlugDesign):
         register(stage)
+
+
+@hookimpl
+def spflow_register_surrogate_kinds(register):
+    from spflow.plugins.surrogates.gp_model import GP
+    from spflow.plugins.surrogates.pce_model import PCE
+    from spflow.plugins.surrogates.pck_model import PCK
+
+    for kind in (PCE, GP, PCK):
+        register(kind)
 
 
 @hookimpl

@@ -14,6 +14,7 @@ import pytest
 from scipy import stats
 from scipy.signal import lfilter
 from test_mcmc_toys import LinearToy, observations_for, outputs_for, space_for
+from test_mcmc_toys import toy_kind_registered  # noqa: F401  (autouse fixture: registers the toy surrogate kind)
 
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext

@@ -11,6 +11,7 @@ import pytest
 from scipy import stats
 from scipy.special import gammaln
 from test_mcmc_toys import LinearToy, observations_for, outputs_for
+from test_mcmc_toys import toy_kind_registered  # noqa: F401  (autouse fixture: registers the toy surrogate kind)
 
 from spflow.core.errors import ParameterError
 from spflow.plugins.calibration import jeffreys

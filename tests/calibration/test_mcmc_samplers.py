@@ -13,6 +13,7 @@ the effective sample size of independent series (ArviZ's ESS; for emcee the walk
 import numpy as np
 import pytest
 from test_mcmc_toys import LinearToy, observations_for, outputs_for, space_for
+from test_mcmc_toys import toy_kind_registered  # noqa: F401  (autouse fixture: registers the toy surrogate kind)
 
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext

@@ -5,13 +5,15 @@ check the toy itself (prediction and round trip through the surrogate contract).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import xarray as xr
 
-from spflow.plugins.surrogates.contract import Surrogate, load_surrogate, register_surrogate_kind
+from spflow.plugins.surrogates.contract import Surrogate, load_surrogate
 from spflow.plugins.surrogates.outputs import OutputIndex
 
+from surrogate_kind_plugin import surrogate_kinds_registered
 
-@register_surrogate_kind
+
 class LinearToy(Surrogate):
     """f(θ) = A θ + b with predict variance ``var`` (constant in θ)."""
 
@@ -31,6 +33,12 @@ class LinearToy(Surrogate):
     @classmethod
     def from_dataset(cls, ds):
         return cls(**cls._common(ds), a=ds["a"].values, b=ds["b"].values, var=ds["var"].values)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def toy_kind_registered():
+    with surrogate_kinds_registered(LinearToy, name="test_mcmc_toys_kind"):
+        yield
 
 
 def outputs_for(blocks: dict[tuple[str, str], int]) -> OutputIndex:

@@ -15,8 +15,10 @@ from spflow.plugins.design.schemas import DESIGN, SPACE
 from spflow.plugins.forward.simulate import common_grid
 from spflow.plugins.forward.stage import RESPONSES
 from spflow.plugins.observations import Observations
-from spflow.plugins.surrogates.contract import SURROGATE, Surrogate, register_surrogate_kind
+from spflow.plugins.surrogates.contract import SURROGATE, Surrogate
 from spflow.plugins.surrogates.outputs import OutputIndex, stack_outputs
+
+from surrogate_kind_plugin import surrogate_kinds_registered
 
 TABLE_3_2 = {"ALPHAV2": [0.0, 3.0], "HBNC70": [0.02, 0.05], "HBNC71": [0.01, 0.02], "AD31": [0.0, 2.0],
              "GAMHF": [55.0, 100.0], "CRK": [0.05, 0.1], "E2C": [1.5, 3.0], "E2WC": [1.5, 3.0],
@@ -27,7 +29,6 @@ Z_A = np.array([-0.5, 0.4, 0.2, -0.3, 0.6, 0.0, -0.6, 0.3, 0.1])
 Z_B = np.array([0.5, -0.2, 0.6, 0.3, -0.4, 0.5, 0.2, -0.5, -0.3])
 
 
-@register_surrogate_kind
 class LinearSurrogate(Surrogate):
     """Exact affine model in the unit coordinates z = to_unit(x): mean = intercept + z @ slopes, zero variance."""
 
@@ -47,6 +48,12 @@ class LinearSurrogate(Surrogate):
     @classmethod
     def from_dataset(cls, ds):
         return cls(**cls._common(ds), intercept=ds["intercept"].values, slopes=ds["slopes"].values)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def toy_kind_registered():
+    with surrogate_kinds_registered(LinearSurrogate, name="test_nsga_stage_kind"):
+        yield
 
 
 class LinearFit(Stage):

@@ -14,6 +14,7 @@ from spflow.plugins.observations import Observations
 from spflow.plugins.surrogates.outputs import OutputIndex
 
 from test_nsga_stage import TABLE_3_2, LinearSurrogate
+from test_nsga_stage import toy_kind_registered  # noqa: F401  (autouse fixture: registers the toy surrogate kind)
 
 CTX = StageContext("test", verbose=False)
 

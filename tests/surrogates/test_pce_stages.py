@@ -9,9 +9,11 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext
 from spflow.plugins.forward.stage import RESPONSE_UNITS, RESPONSES
-from spflow.plugins.surrogates.contract import SURROGATE, Surrogate, load_surrogate, register_surrogate_kind
+from spflow.plugins.surrogates.contract import SURROGATE, Surrogate, load_surrogate
 from spflow.plugins.surrogates.pce_stage import PCEStage
 from spflow.plugins.surrogates.validation import VALIDATION, SurrogateValidation
+
+from surrogate_kind_plugin import surrogate_kinds_registered
 
 CTX = StageContext(node="test", verbose=False)
 NAMES = ["AD31", "HBNC71"]
@@ -85,7 +87,6 @@ def test_pce_stage_reproduces_polynomial_responses(fitted):
     assert got == pytest.approx(expected, rel=1e-10)
 
 
-@register_surrogate_kind
 class _ConstantProxy(Surrogate):
     """A toy kind (no moments()): predicts a fixed vector everywhere, to test validation of arbitrary kinds."""
 
@@ -104,6 +105,12 @@ class _ConstantProxy(Surrogate):
     @classmethod
     def from_dataset(cls, ds):
         return cls(**cls._common(ds), level=ds["level"].values)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def toy_kind_registered():
+    with surrogate_kinds_registered(_ConstantProxy, name="test_pce_stages_kind"):
+        yield
 
 
 def test_validation_works_for_any_kind(fitted):

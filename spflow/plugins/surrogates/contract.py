@@ -16,12 +16,13 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
-from spflow.core.errors import ParameterError, SchemaError
+from spflow.core.errors import ParameterError
+from spflow.core.plugins import get_registry
 from spflow.core.schema import DatasetSchema, Variable
 
 from .outputs import OutputIndex
 
-__all__ = ["Surrogate", "SURROGATE", "register_surrogate_kind", "load_surrogate", "surrogate_kinds"]
+__all__ = ["Surrogate", "SURROGATE", "load_surrogate", "surrogate_kinds"]
 
 #: Schema of every stored surrogate.
 SURROGATE = DatasetSchema(
@@ -35,9 +36,6 @@ SURROGATE = DatasetSchema(
     attrs=("surrogate",),
     doc="a fitted surrogate (see attrs['surrogate'] for its kind)",
 )
-
-_KINDS: dict[str, type[Surrogate]] = {}
-
 
 class Surrogate(ABC):
     """A fitted proxy of a vector-valued model on a uniform box ``lower <= x <= upper`` (physical units)."""
@@ -109,27 +107,13 @@ class Surrogate(ABC):
                 "upper": ds["upper"].values, "outputs": OutputIndex.from_dataset(ds)}
 
 
-def register_surrogate_kind(cls: type[Surrogate]) -> type[Surrogate]:
-    """Class decorator: make ``cls`` loadable by :func:`load_surrogate` under ``cls.kind``."""
-    if not cls.kind:
-        raise TypeError(f"{cls.__name__} must set a non-empty class attribute 'kind'")
-    if _KINDS.get(cls.kind, cls) is not cls:
-        raise TypeError(f"surrogate kind {cls.kind!r} is already registered by {_KINDS[cls.kind].__name__}")
-    _KINDS[cls.kind] = cls
-    return cls
-
-
 def surrogate_kinds() -> list[str]:
-    """Names of the loadable surrogate kinds."""
-    return sorted(_KINDS)
+    """Names of the loadable surrogate kinds (built-in and from plugins)."""
+    return sorted(get_registry().surrogate_kinds)
 
 
 def load_surrogate(ds: xr.Dataset) -> Surrogate:
-    """Rebuild whichever surrogate ``ds`` holds (``attrs["surrogate"]`` picks the kind)."""
+    """Rebuild whichever surrogate ``ds`` holds: ``attrs["surrogate"]`` names the kind, a kind registered through
+    the plugin hook ``spflow_register_surrogate_kinds`` (the built-ins: ``pce``, ``gp``, ``pck``)."""
     SURROGATE.validate(ds, stage="load_surrogate", port="surrogate")
-    kind = ds.attrs["surrogate"]
-    if kind not in _KINDS:
-        from spflow.plugins.surrogates import kinds  # noqa: F401  (registers the built-in kinds)
-    if kind not in _KINDS:
-        raise SchemaError(f"unknown surrogate kind {kind!r}; registered kinds: {surrogate_kinds()}")
-    return _KINDS[kind].from_dataset(ds)
+    return get_registry().surrogate_kind(ds.attrs["surrogate"]).from_dataset(ds)

@@ -7,14 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .contract import register_surrogate_kind
 from .kriging_surrogate import KrigingSurrogate
 from .outputs import OutputIndex
 
 __all__ = ["GP"]
 
 
-@register_surrogate_kind
 class GP(KrigingSurrogate):
     """Ordinary-Kriging Gaussian process; build with :meth:`fit` (or the ``gp`` stage)."""
 

@@ -20,7 +20,7 @@ from spflow.core.errors import ParameterError
 from . import sobol_from_pce as sobol
 from .basis import design_matrix
 from .blas import single_threaded_blas
-from .contract import Surrogate, register_surrogate_kind
+from .contract import Surrogate
 from .degree_adaptive import PCEFit, fit_pce
 from .outputs import OutputIndex
 
@@ -31,7 +31,6 @@ __all__ = ["PCE"]
 _BLOCK = 512
 
 
-@register_surrogate_kind
 class PCE(Surrogate):
     """Polynomial chaos expansion; build with :meth:`fit` (or the ``pce`` / ``adaptive_pce`` stages)."""
 

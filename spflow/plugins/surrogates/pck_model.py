@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 
 from .basis import design_matrix
-from .contract import register_surrogate_kind
 from .degree_adaptive import fit_pce
 from .kriging_surrogate import KrigingSurrogate
 from .lars import hybrid_lars_outputs
@@ -20,7 +19,6 @@ from .outputs import OutputIndex
 __all__ = ["PCK"]
 
 
-@register_surrogate_kind
 class PCK(KrigingSurrogate):
     """PC-Kriging; build with :meth:`fit` (or the ``pck`` stage)."""
 
