@@ -80,8 +80,8 @@ def pipeline(front_end: str | None = "history_matching", mode: str = "relative",
 def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     """The goodness-of-fit figures of every lab fit (Figs. 2.2-2.9, adsorption isotherms) and the prior table (the
     front end's own figures come from its module's ``report`` on a run of that pipeline)."""
-    from spflow.plugins.lab import lab_figures_a as fa
-    from spflow.plugins.lab import lab_figures_b as fb
+    from spflow.plugins.lab import polymer_fit_figures as fa
+    from spflow.plugins.lab import surfactant_fit_figures as fb
 
     figures = [("fit_polymer_rheology", fa.polymer_rheology_figure, "fig_2_2_polymer_rheology"),
                ("fit_polymer_rheology", fa.half_shear_rate_figure, "fig_2_3_half_shear_rate"),

@@ -17,8 +17,8 @@ def spflow_register_stages(register):
     from spflow.plugins.design.parameter_space import ParameterSpace
     from spflow.plugins.forward.stage import Forward
     from spflow.plugins.gap.stage import Diagnose
-    from spflow.plugins.lab.lab_stages_a import FitAdsorption, FitPolymerCoreflood, FitPolymerRheology, FitTracer
-    from spflow.plugins.lab.lab_stages_b import FitDesaturation, FitIFT, FitMEViscosity, FitPhaseBehaviour
+    from spflow.plugins.lab.polymer_fit_stages import FitAdsorption, FitPolymerCoreflood, FitPolymerRheology, FitTracer
+    from spflow.plugins.lab.surfactant_fit_stages import FitDesaturation, FitIFT, FitMEViscosity, FitPhaseBehaviour
     from spflow.plugins.lab.priors import Priors
     from spflow.plugins.observations import Observations
     from spflow.plugins.screening.morris_screening import MorrisScreening

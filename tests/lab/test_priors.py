@@ -18,7 +18,7 @@ from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.design.thesis_tables import TABLE_3_2
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.lab import lab_stages_b
+from spflow.plugins.lab import surfactant_fit_stages
 from spflow.plugins.lab.fit_result import FIT
 from spflow.plugins.lab.priors import Priors
 
@@ -30,10 +30,10 @@ CTX = StageContext("priors", verbose=False)
 def fits():
     """Real FIT datasets of the bundled surfactant lab tables."""
     return {
-        "fit_phase_behaviour": lab_stages_b.FitPhaseBehaviour().run(CTX),
-        "fit_me_viscosity": lab_stages_b.FitMEViscosity().run(CTX),
-        "fit_desaturation": lab_stages_b.FitDesaturation().run(CTX),
-        "fit_ift": lab_stages_b.FitIFT().run(CTX),
+        "fit_phase_behaviour": surfactant_fit_stages.FitPhaseBehaviour().run(CTX),
+        "fit_me_viscosity": surfactant_fit_stages.FitMEViscosity().run(CTX),
+        "fit_desaturation": surfactant_fit_stages.FitDesaturation().run(CTX),
+        "fit_ift": surfactant_fit_stages.FitIFT().run(CTX),
     }
 
 

@@ -10,8 +10,8 @@ from oracles import ogata_banks
 from spflow.core.stage import StageContext
 from spflow.plugins.lab import tracer_fit as tf
 from spflow.plugins.lab.fit_result import FIT, FitError, stated_interval
-from spflow.plugins.lab.lab_figures_a import tracer_figure
-from spflow.plugins.lab.lab_stages_a import FitTracer
+from spflow.plugins.lab.polymer_fit_figures import tracer_figure
+from spflow.plugins.lab.polymer_fit_stages import FitTracer
 
 TRUTH = {"ALPHAL1": 0.01, "TDS_PER_EC": 600.0}
 CTX = StageContext("lab", verbose=False)

@@ -10,8 +10,8 @@ from spflow.core.stage import StageContext
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab import polymer_coreflood as pc
 from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval
-from spflow.plugins.lab.lab_figures_a import polymer_coreflood_figure
-from spflow.plugins.lab.lab_stages_a import FitPolymerCoreflood, FitPolymerRheology
+from spflow.plugins.lab.polymer_fit_figures import polymer_coreflood_figure
+from spflow.plugins.lab.polymer_fit_stages import FitPolymerCoreflood, FitPolymerRheology
 
 TRUTH = {n: default_params()[n] for n in pc.NAMES}
 CTX = StageContext("lab", verbose=False)

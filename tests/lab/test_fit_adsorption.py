@@ -9,8 +9,8 @@ from spflow.core.stage import StageContext
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab import adsorption_fit as af
 from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval, stated_interval
-from spflow.plugins.lab.lab_figures_a import adsorption_figure
-from spflow.plugins.lab.lab_stages_a import FitAdsorption
+from spflow.plugins.lab.polymer_fit_figures import adsorption_figure
+from spflow.plugins.lab.polymer_fit_stages import FitAdsorption
 
 CTX = StageContext("lab", verbose=False)
 

@@ -2,7 +2,7 @@
 
 Each stage reads its lab table(s) (param ``path``; empty = the bundled synthetic file in ``spflow/datasets/lab``),
 fits its sub-model and returns a FIT dataset (:data:`.fit_result.FIT`) plus the data and fitted curves for the
-figures of :mod:`.lab_figures_a`. The cache key follows the files' content (``fingerprint``), not their path.
+figures of :mod:`.polymer_fit_figures`. The cache key follows the files' content (``fingerprint``), not their path.
 """
 
 from __future__ import annotations

@@ -3,9 +3,9 @@
 Truth = the forward model's defaults (thesis Table 2.4) except S2RC = 0.05: the thesis's CDC (Fig. 2.8) levels off
 near S_or ~ 0.1 at the highest rate, and a high-N_c residual inside its range (not on the bound 0) keeps the fit
 regular. ME viscosity keeps Table 2.4's ALPHAV3 = 0, so only ALPHAV1, ALPHAV2 are identifiable (the stage default).
-Writes ``spflow/datasets/lab/<kind>.csv`` and ``spflow/datasets/lab/truth_b.toml``.
+Writes ``spflow/datasets/lab/<kind>.csv`` and ``spflow/datasets/lab/surfactant_truth.toml``.
 
-    .venv/bin/python scripts/make_lab_data_b.py
+    .venv/bin/python scripts/make_surfactant_lab_data.py
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab import desaturation_fit, ift_fit, me_viscosity_fit, phase_behaviour_fit
-from spflow.plugins.lab.lab_stages_a import LAB_DIR, bundled_lab_path
+from spflow.plugins.lab.polymer_fit_stages import LAB_DIR, bundled_lab_path
 from spflow.plugins.lab.lab_table import write_lab_table
 
 TRUTH = {**default_params(), "S2RC": 0.05}
@@ -67,7 +67,7 @@ def tables() -> dict[str, object]:
 
 
 def main() -> None:
-    truth_lines = ["# Truth of the bundled synthetic lab tables of scripts/make_lab_data_b.py (tests only).",
+    truth_lines = ["# Truth of the bundled synthetic lab tables of scripts/make_surfactant_lab_data.py (tests only).",
                    "# Truth = spflow.plugins.forward.parameters defaults (thesis Table 2.4) except S2RC = 0.05.", ""]
     for kind, ds in tables().items():
         path = write_lab_table(ds, bundled_lab_path(kind), kind)
@@ -76,7 +76,7 @@ def main() -> None:
                         f"noise = {NOISE[kind]}", f'noise_model = "{NOISE_DOC[kind]}"', f"[{kind}.truth]"]
         truth_lines += [f"{name} = {TRUTH[name]!r}" for name in FITTED[kind]]
         truth_lines.append("")
-    out = LAB_DIR / "truth_b.toml"
+    out = LAB_DIR / "surfactant_truth.toml"
     out.write_text("\n".join(truth_lines), encoding="utf-8")
     print(f"wrote {out}")
 

@@ -2,7 +2,7 @@
 microemulsion viscosity (Fig. 2.7) and capillary desaturation (Fig. 2.8).
 
 Each stage reads one lab table (parameter ``path``; empty = the bundled synthetic test
-``spflow/datasets/lab/<kind>.csv``, truth in ``truth_b.toml``), fits the forward model's own sub-model to it and
+``spflow/datasets/lab/<kind>.csv``, truth in ``surfactant_truth.toml``), fits the forward model's own sub-model to it and
 returns the FIT dataset (:data:`spflow.plugins.lab.fit_result.FIT`) with the data and the fitted curve as extra
 variables. The table is read and validated when the provenance key is computed -- before any stage runs -- and the
 key follows the file's bytes, not its path or modification time.
@@ -22,7 +22,7 @@ from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.lab import desaturation_fit, ift_fit, me_viscosity_fit, phase_behaviour_fit
 from spflow.plugins.lab.fit_result import FIT
-from spflow.plugins.lab.lab_stages_a import bundled_lab_path
+from spflow.plugins.lab.polymer_fit_stages import bundled_lab_path
 
 __all__ = ["FitPhaseBehaviour", "FitIFT", "FitMEViscosity", "FitDesaturation"]
 

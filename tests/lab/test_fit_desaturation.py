@@ -6,7 +6,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from lab_coverage_b import coverage
+from fit_coverage import coverage
 
 from spflow.core.stage import StageContext
 from spflow.plugins.forward.parameters import default_params
@@ -18,9 +18,9 @@ from spflow.plugins.lab.desaturation_fit import (
     synthetic_desaturation,
 )
 from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval
-from spflow.plugins.lab.lab_figures_b import desaturation_figure
-from spflow.plugins.lab.lab_stages_a import LAB_DIR
-from spflow.plugins.lab.lab_stages_b import FitDesaturation
+from spflow.plugins.lab.surfactant_fit_figures import desaturation_figure
+from spflow.plugins.lab.polymer_fit_stages import LAB_DIR
+from spflow.plugins.lab.surfactant_fit_stages import FitDesaturation
 from spflow.plugins.lab.lab_table import write_lab_table
 
 TRUTH = {**default_params(), "S2RC": 0.05, "S1RC": 0.03, "S3RC": 0.02}
@@ -60,7 +60,7 @@ def test_coverage_over_seeds():
 
 
 def test_stage_on_bundled_table_brackets_truth(tmp_path):
-    truth = tomllib.loads((LAB_DIR / "truth_b.toml").read_text())["desaturation"]["truth"]
+    truth = tomllib.loads((LAB_DIR / "surfactant_truth.toml").read_text())["desaturation"]["truth"]
     stage = FitDesaturation()
     stage.fingerprint()
     fit = stage.run(StageContext("cdc"))

@@ -5,15 +5,15 @@ import tomllib
 
 import numpy as np
 import pytest
-from lab_coverage_b import coverage
+from fit_coverage import coverage
 
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval
-from spflow.plugins.lab.lab_figures_b import phase_behaviour_figure
-from spflow.plugins.lab.lab_stages_a import LAB_DIR
-from spflow.plugins.lab.lab_stages_b import FitPhaseBehaviour
+from spflow.plugins.lab.surfactant_fit_figures import phase_behaviour_figure
+from spflow.plugins.lab.polymer_fit_stages import LAB_DIR
+from spflow.plugins.lab.surfactant_fit_stages import FitPhaseBehaviour
 from spflow.plugins.lab.lab_table import LabDataError, write_lab_table
 from spflow.plugins.lab.phase_behaviour_fit import (
     NAMES,
@@ -69,7 +69,7 @@ def test_coverage_over_seeds():
 
 
 def test_stage_on_bundled_table_brackets_truth(tmp_path):
-    truth = tomllib.loads((LAB_DIR / "truth_b.toml").read_text())["phase_behaviour"]["truth"]
+    truth = tomllib.loads((LAB_DIR / "surfactant_truth.toml").read_text())["phase_behaviour"]["truth"]
     stage = FitPhaseBehaviour()
     stage.fingerprint()
     fit = stage.run(StageContext("pb"))

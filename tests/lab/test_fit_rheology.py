@@ -9,8 +9,8 @@ from spflow.core.stage import StageContext
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab import polymer_rheology as pr
 from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval
-from spflow.plugins.lab.lab_figures_a import half_shear_rate_figure, polymer_rheology_figure
-from spflow.plugins.lab.lab_stages_a import LAB_DIR, FitPolymerRheology
+from spflow.plugins.lab.polymer_fit_figures import half_shear_rate_figure, polymer_rheology_figure
+from spflow.plugins.lab.polymer_fit_stages import LAB_DIR, FitPolymerRheology
 from spflow.plugins.lab.lab_table import LabDataError
 
 TRUTH = {n: default_params()[n] for n in pr.NAMES}
@@ -50,7 +50,7 @@ def test_truth_inside_95_percent_interval_over_seeds():
 
 def test_stage_on_bundled_data_and_figures(tmp_path):
     fit = FitPolymerRheology().run(CTX)
-    truth = tomllib.loads((LAB_DIR / "truth_a.toml").read_text())["truth"]
+    truth = tomllib.loads((LAB_DIR / "polymer_truth.toml").read_text())["truth"]
     for name in pr.NAMES:  # a 3.5-sigma check on the bundled seed (could fail only with a broken fit)
         est, std = float(fit["estimate"].sel(param=name)), float(fit["std"].sel(param=name))
         assert abs(est - truth[name]) <= 3.5 * std, (name, est, std)

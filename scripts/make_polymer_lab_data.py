@@ -1,10 +1,10 @@
 """Regenerate the bundled synthetic lab tables of lab fits A (polymer rheology, polymer coreflood, adsorption,
-tracer) in ``spflow/datasets/lab/`` and their truth in ``spflow/datasets/lab/truth_a.toml``.
+tracer) in ``spflow/datasets/lab/`` and their truth in ``spflow/datasets/lab/polymer_truth.toml``.
 
 Truth: thesis Table 2.4 (the forward model's defaults) for every fitted UTCHEM parameter; TDS_PER_EC (not in
 Table 2.4) = 600 ppm per mS/cm, a typical NaCl-brine value. Noise levels and seeds are written to the truth file.
 
-Usage: ``python scripts/make_lab_data_a.py``
+Usage: ``python scripts/make_polymer_lab_data.py``
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab import adsorption_fit, polymer_coreflood, polymer_rheology, tracer_fit
-from spflow.plugins.lab.lab_stages_a import LAB_DIR
+from spflow.plugins.lab.polymer_fit_stages import LAB_DIR
 from spflow.plugins.lab.lab_table import write_lab_table
 
 SEED = 20240610
@@ -47,7 +47,7 @@ def main(out: Path = LAB_DIR) -> None:
     written.append(write_lab_table(calibration, out / "conductivity_calibration.csv", tracer_fit.CALIBRATION_KIND))
 
     lines = [
-        "# Truth of the bundled synthetic lab tables of lab fits A (scripts/make_lab_data_a.py).",
+        "# Truth of the bundled synthetic lab tables of lab fits A (scripts/make_polymer_lab_data.py).",
         "# Values: thesis Table 2.4 (forward-model defaults); TDS_PER_EC is a typical NaCl-brine value.",
         "# Generated in this order from one numpy default_rng(seed): rheology, coreflood, polymer adsorption,",
         "# surfactant adsorption, tracer effluent + calibration.",
@@ -63,7 +63,7 @@ def main(out: Path = LAB_DIR) -> None:
         f'tracer = "{NOISE["tracer"]:g} x mean brine conductivity, additive Gaussian"',
         "",
     ]
-    (out / "truth_a.toml").write_text("\n".join(lines))
+    (out / "polymer_truth.toml").write_text("\n".join(lines))
     for p in written:
         print(p)
 

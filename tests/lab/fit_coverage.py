@@ -1,4 +1,4 @@
-"""Coverage of the lab fits' 95 % intervals over regenerated synthetic data sets (shared by tests/lab/*_b.py).
+"""Coverage of the lab fits' 95 % intervals over regenerated synthetic data sets (shared by the surfactant fits' tests in tests/lab/).
 
 For each seed the synthetic table is regenerated with that seed's noise, fitted, and the truth compared with the
 fit's interval (Student's t with the fit's degrees of freedom). With 20 seeds and a correct 95 % interval the count

@@ -5,15 +5,15 @@ import tomllib
 
 import numpy as np
 import pytest
-from lab_coverage_b import coverage
+from fit_coverage import coverage
 
 from spflow.core.stage import StageContext
 from spflow.plugins.forward.parameters import default_params
 from spflow.plugins.lab.fit_result import FIT, FitError, fit_interval
 from spflow.plugins.lab.ift_fit import NAMES, fit_ift, ift_model, read_ift_table, synthetic_ift_table
-from spflow.plugins.lab.lab_figures_b import ift_figure
-from spflow.plugins.lab.lab_stages_a import LAB_DIR
-from spflow.plugins.lab.lab_stages_b import FitIFT
+from spflow.plugins.lab.surfactant_fit_figures import ift_figure
+from spflow.plugins.lab.polymer_fit_stages import LAB_DIR
+from spflow.plugins.lab.surfactant_fit_stages import FitIFT
 from spflow.plugins.lab.lab_table import LabDataError, write_lab_table
 
 TRUTH = default_params()
@@ -51,7 +51,7 @@ def test_coverage_over_seeds():
 
 
 def test_stage_on_bundled_table_brackets_truth(tmp_path):
-    truth = tomllib.loads((LAB_DIR / "truth_b.toml").read_text())["ift"]["truth"]
+    truth = tomllib.loads((LAB_DIR / "surfactant_truth.toml").read_text())["ift"]["truth"]
     stage = FitIFT()
     stage.fingerprint()
     fit = stage.run(StageContext("ift"))

@@ -1,6 +1,6 @@
 """Goodness-of-fit figures of lab fits A: Figs. 2.2, 2.3, 2.4, 2.9 and the adsorption isotherm (thesis chapter 2).
 
-Each function takes the FIT dataset of its stage (:mod:`.lab_stages_a`) and a path, draws the lab data with the
+Each function takes the FIT dataset of its stage (:mod:`.polymer_fit_stages`) and a path, draws the lab data with the
 fitted model (curves recomputed from the estimates with the same model functions the fit used) and returns the path.
 """
 
