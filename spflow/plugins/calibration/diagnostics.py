@@ -4,8 +4,9 @@ variance, and ArviZ's rank-normalised split R-hat and bulk/tail ESS.
 **Geweke (App. E, Eq. E.1).** z = (θ̄_A − θ̄_B) / sqrt(Ŝ(0) (1/n_A + 1/n_B)) with A the first ``first`` = 10 % and
 B the last ``last`` = 50 % of a chain. Ŝ(0) is the spectral density at frequency zero, Ŝ(0) = τ_int · s² (τ_int the
 integrated autocorrelation time from emcee's Sokal-windowed estimator, s² the variance), so the denominator is the
-Monte Carlo standard error of the difference of two segment means of a correlated chain (``shared/notes/uq.md``
-§4.2). The thesis's Eq. E.1 and the old PyMC3 ``geweke`` used plain variances, which ignore the autocorrelation and
+Monte Carlo standard error of the difference of two segment means of a correlated chain (Geweke 1992;
+docs/calibration.md, Diagnostics). The thesis's Eq. E.1 and the old PyMC3 ``geweke`` used plain variances, which
+ignore the autocorrelation and
 inflate |z| by about sqrt(τ_int). Ŝ(0) — τ_int and s² alike — is estimated once on the whole chain: under the null
 hypothesis (stationarity) both segments share it, and estimated on a 10 % segment only a few τ long both factors are
 biased low. On AR(1) chains of 888 draws (φ = 0.9, τ = 19, the length of an emcee walker-mean series at the thesis

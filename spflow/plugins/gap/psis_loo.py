@@ -1,4 +1,5 @@
-"""PSIS-LOO of calibrated models on their calibration data (gap notes §3.2-A, §6.1 stage 2: the secondary score).
+"""PSIS-LOO of calibrated models on their calibration data (Vehtari, Gelman &
+Gabry 2017; docs/gap.md, Method: **Scores** — the secondary score).
 
 A fitted model's posterior is the linearised (Laplace) one of :mod:`~spflow.plugins.gap.quantification`:
 unit-box coordinates ``z ~ N(z_hat, C)``, ``C = (J_w' J_w + I / tau^2)^-1``. Along it the whitened calibration
