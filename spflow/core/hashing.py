@@ -1,7 +1,8 @@
 """Canonical content hashing of parameters and xarray/numpy data.
 
 ``joblib.hash`` of an xarray object depends on ``.encoding`` (including the source file path) and on lazily opened
-backends, so identical data can hash differently (notes/pipeline.md §3.3). Here every object is reduced to a canonical
+backends, so identical data can hash differently (docs/architecture.md, Pieces: hashing). Here every object is reduced
+to a canonical
 byte stream: for a Dataset, each variable (data variables and coordinates, sorted by name) contributes its name, dims,
 dtype, shape, canonical attrs and raw C-order bytes; Dataset attrs are included; ``.encoding`` never is. Lazy variables
 are materialised through ``.values``, so the content — not the object — is hashed.

@@ -5,7 +5,8 @@ its calibrated parameters fitted by simulator-based least squares on the study's
 ``heldout`` ones score every candidate effect of the catalogue. Each experiment is simulated with its own core, rate
 and schedule and its measurement chain sets the error model. The default is the bundled study: the thesis's nine
 Table 3.2 parameters calibrated on BCF1 and BCF2 (two salinity sequences: BCF1 alone leaves the salinity-dependent
-parameters free, and then no model transfers to the high-salinity preflush of the other floods, gap notes §4.5) and
+parameters free, and then no model transfers to the high-salinity preflush of the other floods: docs/gap.md, Results
+on the bundled data) and
 BCF3 held out; its data were generated with mechanisms the base model lacks (kept out of this pipeline's sight), so
 the report should name them. ``cells`` = 60 (the data's truth used 100: the remaining discretisation difference is
 part of the gap no catalogue effect explains).

@@ -1,4 +1,5 @@
-"""Self-tests of the analytic oracles in ``tests/oracles`` against closed forms (physics.md section 2) and against
+"""Self-tests of the analytic oracles in ``tests/oracles`` against closed forms (the sources each oracle names) and
+against
 conservation laws evaluated by independent numerical quadrature of the oracle profiles."""
 
 import math
@@ -176,7 +177,7 @@ def test_polymer_production_matches_piecewise_formula():
     t_b, t_c = flood.bank_breakthrough_pv, flood.chemical_breakthrough_pv
     f_b = float(WATER.fw(flood.s_bank))
 
-    def piecewise(t):  # physics.md 2.2, direct-shock case, f_wi = 0
+    def piecewise(t):  # Pope 1980, direct-shock case, f_wi = 0
         if t <= t_b:
             return t
         if t <= t_c:
@@ -236,7 +237,7 @@ def test_tertiary_flood_without_bank_is_rejected():
 
 
 def test_slug_consumption_distance():
-    d_s = langmuir_retardation(1.0 + 0.5 * 0.3, 1000.0, 0.01)  # physics.md 2.6 surfactant Langmuir example
+    d_s = langmuir_retardation(1.0 + 0.5 * 0.3, 1000.0, 0.01)  # surfactant Langmuir row of docs/forward_model.md
     assert d_s == pytest.approx(0.1045, abs=5e-5)
     assert slug_consumption_distance(0.3, d_s) == pytest.approx(0.3 / 0.104545, rel=1e-4)
     assert slug_consumption_distance(0.3, 0.5) == pytest.approx(0.6)
@@ -276,7 +277,8 @@ def test_effluent_midpoint_tends_to_retarded_pore_volume():
 
 
 def test_flory_huggins_property_value():
-    # physics.md 2.6: C_p = 0.1 wt %, C_SEP = 0.2 meq/ml, AP1..3 = 20, 300, 2000, SSLOPE = -0.3, mu_w = 0.8 cP
+    # docs/forward_model.md, Property values: C_p = 0.1 wt %, C_SEP = 0.2 meq/ml, AP1..3 = 20, 300, 2000, SSLOPE =
+    # -0.3, mu_w = 0.8 cP
     assert flory_huggins_viscosity(0.1, 0.8, 20.0, 300.0, 2000.0, 0.2**-0.3) == pytest.approx(9.8757, abs=5e-5)
 
 

@@ -1,4 +1,5 @@
-"""Unit tests of the SP property kernels against physics.md section 2.6 and closed forms written in the tests.
+"""Unit tests of the SP property kernels against docs/forward_model.md, Property values and closed forms written in
+the tests.
 
 Printed table values are checked to their printed digits (|value - printed| <= half a unit of the last printed
 digit, i.e. the value rounds to what is printed), and each value is re-derived here from its closed form at 1e-10
@@ -53,7 +54,7 @@ REL = 1e-10
 
 
 def assert_printed(value, printed):
-    """``value`` rounds to the digits of ``printed`` (a string copied from physics.md)."""
+    """``value`` rounds to the digits of ``printed`` (a string copied from docs/forward_model.md, Property values)."""
     ulp = 10.0 ** Decimal(printed).as_tuple().exponent
     assert abs(value - float(printed)) <= 0.5 * ulp * (1.0 + 1e-9), (value, printed)
 
@@ -216,7 +217,7 @@ def test_langmuir_linear_isotherm():
     assert_rel(langmuir_adsorbed(0.3, 0.5, 0.0), 0.3 * 0.5 / 1.5)  # b = 0: C_hat = a C / (1 + a) of the total
 
 
-# ---------------------------------------------------------------- Hand's rule (physics.md 1.1.2)
+# ---------------------------------------------------------------- Hand's rule (UTCHEM-9.0 Technical Documentation §2)
 
 CSEL, CSEU = 0.3, 0.5
 
@@ -264,7 +265,7 @@ def test_binodal_passes_through_maximum_height():
     assert 0.0 < s[2] < 1.0
 
 
-# ---------------------------------------------------------------- flash rows (physics.md 2.6)
+# ---------------------------------------------------------------- flash rows (docs/forward_model.md, Property values)
 
 
 def test_type_ii_minus_row():
@@ -272,7 +273,7 @@ def test_type_ii_minus_row():
     a = a_of(0.05)
     phase_type, s, c = split(flash(z1, z2, z3, 0.1, CSEL, CSEU, 0.05, 0.05, 0.05, 1e-4))
     assert phase_type == 1
-    t = a * z1 / (z3**2 + a * z1 * (1.0 - z2))  # physics.md closed form
+    t = a * z1 / (z3**2 + a * z1 * (1.0 - z2))  # closed form of docs/forward_model.md, Property values
     me_ref = (t * z1, 1.0 + t * (z2 - 1.0), t * z3)
     for value, ref, printed in zip(c[:, 2], me_ref, ("0.95994", "0.02407", "0.01600")):
         assert_printed(value, printed)
@@ -316,7 +317,8 @@ def test_optimum_type_iii_row():
     f_ref = (1.0 - math.exp(-distance)) / (1.0 - math.exp(-math.sqrt(2.0)))
     assert_rel(f, f_ref)
     assert_rel(f, hirasaki_factor(1.0, 0.0, 0.0, *c[:, 2]))  # symmetric at the optimum
-    # physics.md prints F = 0.6714; the formula gives 0.671483, i.e. the print is truncated rather than rounded
+    # docs/forward_model.md, Property values, prints F = 0.6714; the formula gives 0.671483, i.e. the print is
+    # truncated rather than rounded
     # (it differs from the rounded 0.6715 by one unit of its last digit).
     assert abs(f - 0.6714) < 1e-4
     sigma = chun_huh_ift(r23, f, 30.0, 0.3, 10.0)
@@ -574,11 +576,11 @@ def test_brooks_corey_pc():
     assert brooks_corey_pc(2.0, 1e-9, 2.0, 22.0, 22.0) == 2000.0
 
 
-# ---------------------------------------------------------------- dispersion (Eq. 1.9, physics.md 2.4)
+# ---------------------------------------------------------------- dispersion (Eq. 1.9, Ogata & Banks 1961)
 
 
 def ogata_banks(x_d, t_d, pe, r):
-    """Semi-infinite continuous-injection solution (physics.md 2.4), written with erfcx to avoid e^Pe overflow."""
+    """Semi-infinite continuous-injection solution (Ogata & Banks 1961), written with erfcx to avoid e^Pe overflow."""
     spread = 2.0 * math.sqrt(t_d / (r * pe))
     first = (x_d - t_d / r) / spread
     second = (x_d + t_d / r) / spread
@@ -589,7 +591,7 @@ def test_longitudinal_dispersion_and_ogata_banks_table():
     phi, s, u, alpha, d_mol = 0.21, 0.7, 4e-6, 0.003, 1e-9
     assert_rel(longitudinal_dispersion(phi, s, u, alpha, d_mol), phi * s * d_mol + alpha * u)
     assert_rel(longitudinal_dispersion(phi, s, -u, alpha, 0.0), alpha * u)
-    # Peclet number of a core from the kernel: Pe = u L / (phi S K) = L / alpha_L = 200 (physics.md 2.4)
+    # Peclet number of a core from the kernel: Pe = u L / (phi S K) = L / alpha_L = 200 (Ogata & Banks 1961)
     length = 200.0 * alpha
     pe = u * length / longitudinal_dispersion(phi, s, u, alpha, 0.0)
     assert_rel(pe, 200.0)

@@ -1,4 +1,5 @@
-"""Salinity scan of a tertiary SP flood through the Winsor II(-) / III / II(+) regimes (physics.md section 3, item 6).
+"""Salinity scan of a tertiary SP flood through the Winsor II(-) / III / II(+) regimes (docs/forward_model.md,
+Verification: test_salinity_scan.py).
 
 The core starts at the waterflood residual (S_w = 1 - S2RWC, no mobile oil); one SP slug, a polymer drive and a
 water post-flush are injected, all at the scanned salinity (also the connate brine's), so that the effective

@@ -1,4 +1,5 @@
-"""Forward model vs Buckley-Leverett/Welge (physics.md 2.1; test ladder step 2; thesis Figs. 1.6-1.7).
+"""Forward model vs Buckley-Leverett/Welge (Buckley & Leverett 1942; Welge 1952; test ladder step 2; thesis Figs.
+1.6-1.7).
 
 Cases: the three viscosity ratios of thesis Fig. 1.7 (mu_o/mu_w = 0.5, 1, 2; k_r° = 1, n = 2, no residuals) and a
 Corey case with residuals (S_wc = 0.2, S_or = 0.3, n_w = 2.5, n_o = 2, mu_o/mu_w = 13.8). Water is injected at the

@@ -1,4 +1,4 @@
-"""Forward model vs the continuous-polymer Riemann solution (Pope 1980; Lake ch. 5; physics.md 2.2; ladder step 3).
+"""Forward model vs the continuous-polymer Riemann solution (Pope 1980; Lake ch. 5; ladder step 3).
 
 Secondary polymer floods of a core at connate water: (A) no IPV and no adsorption, (B) Langmuir adsorption,
 (C) scaled inaccessible pore volume (EPHI4 = 0.85, UTCHEM's form) for a polymer that does not viscosify

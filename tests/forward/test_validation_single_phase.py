@@ -1,4 +1,5 @@
-"""Forward model vs single-phase analytic references (physics.md 2.4-2.5; test ladder step 4).
+"""Forward model vs single-phase analytic references (Ogata & Banks 1961; Darcy with resistance factors, Lake 1989 ch.
+5; test ladder step 4).
 
 The core is fully water saturated (SWI = 1, no residual oil, k_rw° = 1), so Darcy's law and the 1-D
 advection-dispersion-adsorption equation hold exactly:

@@ -1,4 +1,4 @@
-"""Forward model vs the tertiary SP Riemann solution (Larson & Hirasaki 1978; physics.md 2.3; ladder step 3).
+"""Forward model vs the tertiary SP Riemann solution (Larson & Hirasaki 1978; ladder step 3).
 
 The core starts at waterflood residual oil (SWI = 1 - S2RWC = 0.7) and receives a continuous surfactant-polymer
 slug with capillary desaturation on. The case is built so that the two-phase fractional-flow picture holds:
@@ -9,7 +9,8 @@ slug with capillary desaturation on. The case is built so that the two-phase fra
   waterflood (IFT 21 mN/m) stays at S2RWC = 0.3; microemulsion residuals are zero at both ends, the end points and
   exponents are the same at low and high Nc, so only the oil residual changes;
 * microemulsion viscosity without the exponential terms (ALPHAV1 = ALPHAV2 = ALPHAV3 = 0): ``C13 mu_p + C23 mu_o``,
-  with the microemulsion composition from Hand's rule (physics.md 2.6: tie-lines through the oil apex put the ME at
+  with the microemulsion composition from Hand's rule (docs/forward_model.md, Property values: tie-lines through the
+  oil apex put the ME at
   ``(A, r^2, A r)/(A + r^2 + A r)``, ``r`` = injected surfactant/water ratio) and the polymer diluted by the oil
   the microemulsion carries;
 * no adsorption, no IPV, no dispersion, no shear thinning or permeability reduction: one chemical front, D = 0.

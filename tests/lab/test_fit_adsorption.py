@@ -1,4 +1,5 @@
-"""Langmuir adsorption fit (Eqs. 2.15-2.16): isotherm vs physics.md values, unit conversion, recovery, coverage."""
+"""Langmuir adsorption fit (Eqs. 2.15-2.16): isotherm vs the hand values of docs/forward_model.md, unit conversion,
+recovery, coverage."""
 
 import numpy as np
 import pytest
@@ -20,7 +21,7 @@ def _truth(component):
 
 
 def test_isotherm_matches_physics_notes():
-    # physics.md 2.6: surfactant AD31 1.0, AD32 0.5, C_SE 0.3, B3D 1000, C3 0.01 -> 0.001045;
+    # docs/forward_model.md, Property values: surfactant AD31 1.0, AD32 0.5, C_SE 0.3, B3D 1000, C3 0.01 -> 0.001045;
     # polymer AD41 0.7, B4D 100, C4 0.1 wt% -> 0.006364 wt%
     assert af.isotherm(0.01, 0.3, 1.0, 0.5, 1000.0) == pytest.approx(0.0010455, rel=1e-4)
     assert af.isotherm(0.1, 0.0, 0.7, 0.0, 100.0) == pytest.approx(0.0063636, rel=1e-4)

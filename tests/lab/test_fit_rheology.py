@@ -1,4 +1,5 @@
-"""Polymer rheology fit (Eqs. 2.1-2.5): model vs physics.md values, exact recovery, coverage over seeds, errors."""
+"""Polymer rheology fit (Eqs. 2.1-2.5): model vs the hand values of docs/forward_model.md, exact recovery, coverage
+over seeds, errors."""
 
 import tomllib
 
@@ -18,7 +19,8 @@ CTX = StageContext("lab", verbose=False)
 
 
 def test_model_matches_physics_notes_flory_huggins_and_meter_values():
-    # physics.md 2.6: Cp 0.1 wt%, C_SEP 0.2, AP 20/300/2000, SSLOPE -0.3, mu_w 0.8 -> mu0 9.8757 cP; GAMHF 10 1/s,
+    # docs/forward_model.md, Property values: Cp 0.1 wt%, C_SEP 0.2, AP 20/300/2000, SSLOPE -0.3, mu_w 0.8 -> mu0
+    # 9.8757 cP; GAMHF 10 1/s,
     # POWN 1.8 -> 8.6341/5.3378/2.0416/1.0224 cP at 1/10/100/1000 1/s. Eq. 2.5 with A0 = 10, A1 = A2 = 0 is GAMHF 10.
     theta = {"AP1": 20.0, "AP2": 300.0, "AP3": 2000.0, "SSLOPE": -0.3, "BETAP": 1.0, "POWN": 1.8,
              "A0": 10.0, "A1": 0.0, "A2": 0.0}

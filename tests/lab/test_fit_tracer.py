@@ -1,4 +1,5 @@
-"""Tracer / conductivity fit (Fig. 2.9): Ogata-Banks vs the test oracle and physics.md, recovery, coverage, errors."""
+"""Tracer / conductivity fit (Fig. 2.9): Ogata-Banks vs the test oracle and the hand values of docs/forward_model.md,
+recovery, coverage, errors."""
 
 import numpy as np
 import pytest

@@ -1,8 +1,8 @@
 """Independent analytic references for validating the spflow forward model.
 
 Nothing in this package imports :mod:`spflow`: every reference is written from fractional-flow theory
-(Buckley-Leverett/Welge; Pope 1980; Larson & Hirasaki 1978; Lake 1989) and the closed forms collected in
-``/work/shared/notes/physics.md`` section 2, using only numpy/scipy. Dimensionless conventions: ``x_D = x/L``,
+(Buckley-Leverett/Welge; Pope 1980; Larson & Hirasaki 1978; Lake 1989) and their closed forms (docs/forward_model.md,
+Verification), using only numpy/scipy. Dimensionless conventions: ``x_D = x/L``,
 ``t_D`` = injected pore volumes (PV), ``xi = x_D/t_D``.
 """
 

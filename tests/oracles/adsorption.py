@@ -1,4 +1,4 @@
-"""Langmuir retardation of a chemical step (physics.md 1.1.2; thesis Eqs. 2.15-2.16).
+"""Langmuir retardation of a chemical step (UTCHEM-9.0 Technical Documentation §2; thesis Eqs. 2.15-2.16).
 
 ``C_hat = a C / (1 + b C)`` (adsorbed volume per pore volume); a step from 0 to ``C_J`` is retarded by
 ``D = C_hat(C_J)/C_J = a/(1 + b C_J)`` pore volumes (UTCHEM units: ``a`` dimensionless, ``b`` per unit of ``C``).

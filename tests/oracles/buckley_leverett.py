@@ -1,4 +1,5 @@
-"""Buckley-Leverett displacement with the Welge tangent construction (thesis Eqs. 1.10-1.11; physics.md section 2.1).
+"""Buckley-Leverett displacement with the Welge tangent construction (thesis Eqs. 1.10-1.11; Buckley & Leverett 1942;
+Welge 1952).
 
 Injecting a higher saturation ``S_inj`` into ``S_init`` gives a shock from ``S_init`` to the Welge front saturation
 ``S_f`` (tangent from ``(S_init, f(S_init))``: ``f'(S_f) = [f(S_f) - f(S_init)]/(S_f - S_init)``) followed by a

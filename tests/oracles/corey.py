@@ -1,4 +1,4 @@
-"""Corey relative permeabilities and the water fractional flow (thesis Eqs. 1.6 and 1.11; physics.md section 2).
+"""Corey relative permeabilities and the water fractional flow (thesis Eqs. 1.6 and 1.11).
 
 ``S_n = (S_w - S_wc)/(1 - S_wc - S_or)``, ``k_rw = k_rw° S_n^n_w``, ``k_ro = k_ro° (1 - S_n)^n_o`` and
 ``f_w = (k_rw/mu_w) / (k_rw/mu_w + k_ro/mu_o)``. Viscosities may be in any one unit (cP here): only their ratio

@@ -1,4 +1,4 @@
-"""Ogata-Banks breakthrough with dispersion and retardation (physics.md 2.4; 1-D form of thesis Eq. 1.9).
+"""Ogata-Banks breakthrough with dispersion and retardation (Ogata & Banks 1961; 1-D form of thesis Eq. 1.9).
 
 Continuous step injection into a semi-infinite medium, ``R c_t + c_x = (1/Pe) c_xx`` in dimensionless form
 (``t_D`` in PV, ``Pe = L/alpha_L``, ``R = (1 - phi_IPV) + D`` in the scaled-IPV form):

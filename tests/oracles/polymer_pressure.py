@@ -1,4 +1,5 @@
-"""Single-phase polymer flood pressure drop: piston front, resistance factors (physics.md 2.5; thesis Eqs. 2.6-2.8).
+"""Single-phase polymer flood pressure drop: piston front, resistance factors (Darcy with resistance factors, Lake
+1989 ch. 5; thesis Eqs. 2.6-2.8).
 
 A polymer step injected at constant rate into a water-filled core advances as a piston at ``x_f/L = t_D / R`` with
 ``R = (1 - phi_IPV) + D``; with Darcy's law in series ``dp(t) = q/(k A) [mu_p R_k x_f + mu_w (L - x_f)]``, i.e.

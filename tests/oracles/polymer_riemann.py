@@ -1,4 +1,4 @@
-"""Continuous chemical (polymer) injection: Riemann solution of Pope (1980) / Lake (1989) ch. 5 (physics.md 2.2).
+"""Continuous chemical (polymer) injection: Riemann solution of Pope (1980) / Lake (1989) ch. 5.
 
 Water ``S_t + f_x = 0`` with ``f = f_c`` behind the chemical front and ``f_w`` ahead of it; chemical storage
 ``(a S + b) c`` per unit pore volume with ``a, b`` from :func:`storage_coefficients` (retardation ``D`` from

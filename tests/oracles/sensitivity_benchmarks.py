@@ -1,7 +1,6 @@
 """Benchmark functions with analytic means, variances and Sobol indices (Ishigami; Sobol G-function).
 
-Independent of spflow: closed forms from Ishigami & Homma (1990) and Saltelli & Sobol' (1995), as collected in
-``shared/notes/uq.md`` §2.1-2.2.
+Independent of spflow: closed forms from Ishigami & Homma (1990) and Saltelli & Sobol' (1995).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Tertiary surfactant / surfactant-polymer flood (Larson & Hirasaki 1978; Pope 1980; Lake ch. 9; physics.md 2.3).
+"""Tertiary surfactant / surfactant-polymer flood (Larson & Hirasaki 1978; Pope 1980; Lake ch. 9).
 
 The core starts at waterflood residual, ``S_wI = 1 - S_orw`` (``f_w = 1``: no oil flows). Behind the chemical front
 the high-capillary-number curve ``f_c`` applies (high-Nc residuals/end points/exponents, slug aqueous viscosity);

@@ -4,7 +4,7 @@ A profile is a left-to-right list of segments covering ``0 <= xi < inf``: consta
 which ``f'(S) = xi``; jumps between segments are shocks. Integrals of a fan are exact (no quadrature): along a
 rarefaction ``d xi = f''(S) dS`` so ``int S d xi = [S f'(S) - f(S)]`` (the Welge identity). This gives the oil in
 place, hence the cumulative oil ``N_p(t_D) = t_D int_0^{1/t_D} (S - S_init) d xi``, and the outlet state at
-``xi = 1/t_D`` (physics.md sections 2.1-2.3).
+``xi = 1/t_D`` (Buckley & Leverett 1942; Pope 1980; Larson & Hirasaki 1978).
 """
 
 import math

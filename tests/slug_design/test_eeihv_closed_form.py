@@ -1,6 +1,6 @@
 """Closed-form two-objective EEIHV against independent references: a Monte Carlo average of hypervolume
-improvements computed with moocore's exact hypervolume, finite differences, and its two limits (notes/uq.md §3.2,
-§6). The closed form itself never computes a hypervolume."""
+improvements computed with moocore's exact hypervolume, finite differences, and its two limits (docs/eeihv.md §2). The
+closed form itself never computes a hypervolume."""
 
 import moocore
 import numpy as np

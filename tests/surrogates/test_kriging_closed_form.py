@@ -1,5 +1,6 @@
 """Universal Kriging at fixed hyperparameters (spflow.plugins.surrogates.kriging) against direct numpy
-implementations of the formulas of notes/uq.md §1.2 written out here with explicit inverses, and against brute-force
+implementations of the formulas of docs/surrogates.md (Closed forms at fixed hyperparameters) written out here with
+explicit inverses, and against brute-force
 leave-one-out refits (Dubrule's formula, with trend re-estimation)."""
 
 import numpy as np

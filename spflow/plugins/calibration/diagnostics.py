@@ -4,8 +4,9 @@ variance, and ArviZ's rank-normalised split R-hat and bulk/tail ESS.
 **Geweke (App. E, Eq. E.1).** z = (θ̄_A − θ̄_B) / sqrt(Ŝ(0) (1/n_A + 1/n_B)) with A the first ``first`` = 10 % and
 B the last ``last`` = 50 % of a chain. Ŝ(0) is the spectral density at frequency zero, Ŝ(0) = τ_int · s² (τ_int the
 integrated autocorrelation time from emcee's Sokal-windowed estimator, s² the variance), so the denominator is the
-Monte Carlo standard error of the difference of two segment means of a correlated chain (``shared/notes/uq.md``
-§4.2). The thesis's Eq. E.1 and the old PyMC3 ``geweke`` used plain variances, which ignore the autocorrelation and
+Monte Carlo standard error of the difference of two segment means of a correlated chain (Geweke 1992;
+docs/calibration.md, Diagnostics). The thesis's Eq. E.1 and the old PyMC3 ``geweke`` used plain variances, which
+ignore the autocorrelation and
 inflate |z| by about sqrt(τ_int). Ŝ(0) — τ_int and s² alike — is estimated once on the whole chain: under the null
 hypothesis (stationarity) both segments share it, and estimated on a 10 % segment only a few τ long both factors are
 biased low. On AR(1) chains of 888 draws (φ = 0.9, τ = 19, the length of an emcee walker-mean series at the thesis
@@ -27,7 +28,7 @@ each run's walker-mean series (a function of the ensemble's Markov state, so its
 cross-walker correlation), the runs being the replicas (:func:`independent_series`).
 
 **R-hat / ESS** come from ArviZ (``az.rhat`` rank-normalised split R-hat, ``az.ess`` bulk and tail; Vehtari et al.
-2021). ArviZ 0.2x announces its 1.0 refactor with a FutureWarning on import; it is silenced here only.
+2021), imported only when a summary is computed (:func:`arviz`).
 """
 
 from __future__ import annotations
@@ -46,9 +47,15 @@ __all__ = ["arviz", "integrated_time", "geweke", "geweke_familywise", "geweke_in
 
 
 def arviz():
-    """The ``arviz`` module, imported with its refactor FutureWarning silenced."""
+    """The ``arviz`` module, imported here, when a computation needs it, rather than when spflow is imported.
+
+    ``import arviz`` costs about 1.5 s (it imports ``matplotlib.pyplot``) and ArviZ 0.2x announces its 1.0 refactor
+    with a ``FutureWarning`` on import. ArviZ 1.x, which has no such notice, needs Python >= 3.12 while spflow
+    supports 3.10 and pins ``arviz<1``; the functions used here (``rhat``, ``ess``, ``loo``, ``from_dict``) keep
+    their meaning in 1.x. So this one notice, matched by its text, is the only warning silenced, at the one place
+    spflow imports ArviZ; any other warning ArviZ's import raises passes through."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", FutureWarning)
+        warnings.filterwarnings("ignore", message=r"\s*ArviZ is undergoing a major refactor", category=FutureWarning)
         import arviz as az
     return az
 

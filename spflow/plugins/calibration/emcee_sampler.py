@@ -11,7 +11,8 @@ walker is a ``chain`` of the output (coordinates ``chain_run`` and ``chain_walke
 walkers of one run are not independent, so R-hat across them is a heuristic — across runs it is a real check.
 
 Moves: ``de_snooker`` (default: 80 % differential evolution, 20 % snooker, emcee's suggestion for multimodal targets,
-``shared/notes/uq.md`` §4.1) or ``stretch`` (emcee's own default, a = 2). On the 9-parameter chapter-4 posterior of
+emcee's documentation on moves, Foreman-Mackey et al. 2013; ter Braak & Vrugt 2008) or ``stretch`` (emcee's own
+default, a = 2). On the 9-parameter chapter-4 posterior of
 a clean twin the stretch move needed about 3x more evaluations per effective sample (τ ≈ 40 vs 15 kept draws per
 walker at 18 walkers) and left R-hat near 1.1 within the thesis budget; see ``docs/calibration.md``.
 

@@ -13,7 +13,7 @@ is infinite); Jeffreys' rule for the model that includes v is finite at σ → 0
 arbitrary scale is pinned by the σ → ∞ limit, where it equals 1/σ for every θ, so marginals at different θ are
 comparable.
 
-**Marginal.** With v ≡ 0 the integral is closed (``shared/notes/uq.md`` §4.3):
+**Marginal.** With v ≡ 0 the integral is closed (docs/calibration.md, The posterior):
 
     p(d | θ) = ∫₀^∞ N(d | f, σ² I) σ^-1 dσ = ½ Γ(n/2) π^(-n/2) S^(-n/2),   S = Σ_k r_k².
 

@@ -1,7 +1,7 @@
 """Unit conversions of the forward model, in one place.
 
 The user-facing side speaks lab units (ppm, mD, ml/min, cP, ft for dispersivities); the kernel works in SI for
-pressure and in UTCHEM concentration units for the chemistry (physics.md section 1.5, item 5):
+pressure and in UTCHEM concentration units for the chemistry (docs/forward_model.md, Physics and modelling choices):
 
 * salinity: total dissolved solids (ppm, mg/l of brine)  ->  anions and divalent cations in meq/ml of water.
   The conversion scales the thesis brine linearly: Table 2.1 gives 0.145 meq/ml anions and 0.0097 meq/ml divalent

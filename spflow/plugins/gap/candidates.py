@@ -1,4 +1,4 @@
-"""Screen, shortlist and refit candidate effects (gap notes §6.1 stage 2, steps 1-2).
+"""Screen, shortlist and refit candidate effects (docs/gap.md, Method: **Which**).
 
 * :func:`fingerprint_columns` — whitened finite-strength responses of each candidate at a calibrated point
   (one forward run per candidate and test strength), the input of
@@ -9,7 +9,7 @@
   calibrated parameter: nothing to attribute);
 * :func:`refit` — "reference model + effect": the calibrated parameters, the strengths already in the reference
   and the new strength fitted together, from nested and fresh starts at every test strength (the non-convexity
-  guard of gap notes §3.2-A).
+  guard of docs/gap.md, Method: **Which**).
 """
 
 from __future__ import annotations

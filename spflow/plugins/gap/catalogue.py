@@ -5,12 +5,14 @@ A candidate is a catalogue effect (:mod:`spflow.plugins.forward.effects`) whose 
 (``b = 0``) is a *missing mechanism* and one that is on is a *mis-specified strength*. Each built-in has
 
 * a **physical range**: strengths a lab would accept as that mechanism (the decision rule's "physical strength"
-  test, gap notes §6.1); for the built-ins the ranges follow the parameter sources of ``docs/forward_model.md``
+  test, docs/gap.md, Method: **Decision**); for the built-ins the ranges follow the parameter sources of
+  ``docs/forward_model.md``
   (e.g. IPV up to the 15 % of Table 2.4, capillary entry pressures 0.5-20 kPa for Berea, adsorption rates from
   equilibrium down to ~0.2 per PV-time, a reversible share of the polymer adsorption from 20 % -- a desorption a
   post-flush can show -- to ECLIPSE's fully reversible option);
 * a **search range** for the refit, wider than the physical range so that a fit can say "weaker than physical";
-* **test strengths**: the finite strengths at which fingerprints are taken (gap notes §4.5: a derivative at
+* **test strengths**: the finite strengths at which fingerprints are taken (docs/gap.md, Method: **Which**: a
+derivative at
   ``s = 0`` is a poor guide to a finite front shift).
 
 Third-party effects (registered through ``spflow_register_effects``) get their registered bounds as the physical

@@ -1,4 +1,5 @@
-"""Where inside a slug the misfit changes: mean-shift change points in whitened residuals (gap notes §2.9, §6.1).
+"""Where inside a slug the misfit changes: mean-shift change points in whitened residuals (docs/gap.md,
+Method: **Where**).
 
 Change points at slug boundaries are expected and say nothing (the residuals of a gap cell jump where the injected
 fluid changes); change points *inside* a slug -- at the polymer breakthrough, when an oil bank or a retention front

@@ -2,8 +2,8 @@
 
 :func:`design_space` turns the reference coreflood's schedule into a list of candidate :class:`Design` s, each a
 forward-model schedule with a human-readable label. The variations are the ones a lab runs on a second core plug
-of the same rock, and the ones that separate the catalogue's mechanisms (gap notes §3.3; project notes on the
-independent-world study §4):
+of the same rock, and the ones that separate the catalogue's mechanisms (docs/next_experiment.md;
+Schöniger et al. 2015's justifiability analysis used for design):
 
 * ``repeat`` — the reference schedule again (the baseline: what a replicate flood adds);
 * ``concentration`` — the polymer (and surfactant) concentration of every chemical slug scaled (the viscosity law

@@ -1,4 +1,4 @@
-"""The gap diagnosis: calibrate the base model, localise its misfit, attribute it, quantify the gain (gap notes §6.1).
+"""The gap diagnosis: calibrate the base model, localise its misfit, attribute it, quantify the gain (docs/gap.md).
 
 :func:`diagnose` runs the whole procedure on measured corefloods and returns a :class:`GapDiagnosis`;
 :mod:`~spflow.plugins.gap.report` turns that into the gap-report Dataset and ``summary.json``, and

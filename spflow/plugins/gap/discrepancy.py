@@ -3,7 +3,8 @@
 In the spirit of Kennedy & O'Hagan (2001) and Brynjarsdóttir & O'Hagan (2014) -- reality = simulator + delta +
 noise -- the calibrated base model is given a flexible discrepancy ``delta`` fitted on the calibration data:
 per block (observed variable x experiment) and per slug window inside it (coreflood responses jump at slug
-changes, so one smooth function across a slug boundary would be wrong: gap notes §2.1), a Legendre polynomial in
+changes, so one smooth function across a slug boundary would be wrong: docs/gap.md, Method: **Competitor**), a
+Legendre polynomial in
 PV of degree ``degree`` (fewer terms in a window with few points), fitted by generalised least squares in the
 block's own AR(1) error metric:
 
@@ -15,7 +16,8 @@ is its best transferable guess: per (variable, slug name), the mean fitted delta
 injected under a slug of that name (e.g. the mean chase-water Δp bias), zero for slug names the calibration
 corefloods lack. A physical effect earns its name only when it predicts the held-out coreflood better than the
 base model *and* better than this competitor, by the decision rule's margins (:mod:`~spflow.plugins.gap.verdict`):
-a mechanism transfers, a bias pattern does not (project notes on the independent world, §2).
+a mechanism transfers, a bias pattern does not (docs/gap.md, Method: **Competitor**;
+Brynjarsdóttir & O'Hagan 2014 on why a flexible discrepancy alone does not identify the physics).
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """The error model of a gap diagnosis: AR(1) errors per QoI block, fixed from the lab's measurement model.
 
-Every candidate model is scored under the *same* error model (gap notes §2.8, §6.1 stage 0): misfit differences
+Every candidate model is scored under the *same* error model (docs/gap.md, Method: **Error
+model**; an AR(1) likelihood as in Schoups & Vrugt 2010): misfit differences
 between candidates are then comparable, and autocorrelated transducer noise does not inflate them. One block is
 one (variable, experiment) series on the simulator grid. Within a block the error is
 

@@ -1,8 +1,9 @@
 """Projected fingerprints: what an effect does to the data that re-calibrating the base model cannot absorb.
 
 At the calibrated base point, the fingerprint of candidate ``k`` at a finite test strength ``t`` is the whitened
-change of the predictions, ``g = W [y(theta, s_k = t) - y(theta, s_k = b_k)]`` (gap notes §3.2-B, finite
-strengths rather than derivatives, §4.5). Re-calibration can absorb the part of ``g`` that lies along the
+change of the predictions, ``g = W [y(theta, s_k = t) - y(theta, s_k = b_k)]`` (docs/gap.md, Method: **Which**;
+finite strengths rather than derivatives, since a derivative at ``s = 0`` misjudges a finite front shift).
+Re-calibration can absorb the part of ``g`` that lies along the
 whitened Jacobian ``J`` of the calibrated parameters; what is left is the projected fingerprint ``P g``.
 
 The calibrated parameters can only move inside their ranges, so the nuisance directions are projected out with a
@@ -20,7 +21,7 @@ effect. With the data residual ``d = W (y_obs - y(theta_hat))`` the screen stati
 approximately N(0, 1) when the effect is absent; ``z > 0`` means that adding the effect moves the prediction
 toward the data. ``||P g||_P`` at the true strength is the fingerprint's signal-to-noise ratio (SNR). The angle
 matrix ``cos phi_jk = <P g_j, g_k> / (||P g_j||_P ||P g_k||_P)`` is the a-priori ambiguity of two effects
-(|cos| > 0.9: near-collinear, gap notes §3.2-B).
+(|cos| > 0.9: near-collinear, docs/gap.md, Method: **Which**).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Residual/input cross-correlation: does the misfit follow an injected channel, and with which lag (gap notes §2.8)?
+"""Residual/input cross-correlation: does the misfit follow an injected channel, and with which lag (the
+system-identification residual test, Ljung 1999 §16.6; docs/gap.md, Method: **Where**)?
 
 The system-identification test of unmodelled dynamics (Ljung 1999 §16.6; MATLAB ``resid``): residuals that
 correlate with an input at a positive lag point to a mechanism driven by that input -- with salinity steps to

@@ -1,7 +1,7 @@
 """Which observations form the vectors a diagnosis compares, in which order, with which error model.
 
 A :class:`Block` is one (variable, experiment) series at the grid points where it was measured, labelled with the
-slug being injected at each point (``<qoi>:<slug>:<pv>`` naming of gap notes §6.1). A :class:`Layout` concatenates
+slug being injected at each point (``<qoi>:<slug>:<pv>`` naming). A :class:`Layout` concatenates
 blocks into one vector and whitens residual vectors block by block (:mod:`spflow.plugins.gap.error_model`).
 """
 

@@ -4,7 +4,7 @@ When a diagnosis ends ambiguous (several calibrated models -- *hypotheses* -- ex
 well) or an effect is weakly identified, :func:`rank_designs` ranks candidate corefloods
 (:func:`~spflow.plugins.gap.design_space.design_space`) by how well each would tell the hypotheses apart, in the
 spirit of Box & Hill (1967): choose the experiment where the candidate models' predictions differ most relative to
-their predictive spread (gap notes §3.3; project notes on the independent-world study §4).
+their predictive spread (docs/next_experiment.md).
 
 **Predictive distributions.** Each hypothesis ``m`` is a calibrated model (a :class:`~spflow.plugins.gap.
 least_squares.Fit`: unit-box parameters and effect strengths) with a linearised parameter covariance ``C_m``

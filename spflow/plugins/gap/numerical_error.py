@@ -15,8 +15,8 @@ is the scale of the numerical error at point ``i``. It enters the error model of
 term added to the measurement variance: each AR(1) scale ``a_i`` becomes ``sqrt(a_i^2 + d_i^2)`` (for an
 integrated block, the random-walk innovation, the increments of ``d``). Every model then -- base, candidates,
 competitors -- is judged with the same covariance: a misfit of the size of the simulator's own numerical error is
-no longer evidence of a missing mechanism (project notes on the independent world, §2: the numerical error as a
-part of the likelihood covariance).
+no longer evidence of a missing mechanism (docs/gap.md, Method: **Numerical error**;
+the numerical error as a part of the likelihood covariance, as in Kennedy & O'Hagan 2001).
 """
 
 from __future__ import annotations

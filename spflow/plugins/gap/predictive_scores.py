@@ -1,4 +1,5 @@
-"""Out-of-sample scores of calibrated models: held-out experiments, or leave-one-slug-out (gap notes §3.2-A).
+"""Out-of-sample scores of calibrated models: held-out experiments, or leave-one-slug-out (docs/gap.md,
+Method: **Scores**).
 
 A calibrated model predicts held-out data ``y`` with the Gaussian predictive distribution of its linearised
 (Laplace) posterior: mean ``y_fit`` and, in the whitened space of the shared error model,
@@ -16,7 +17,8 @@ sequential pointwise terms (``p(y_1) p(y_2 | y_1) ...``)
 and the expected log predictive density (ELPD) difference of model ``k`` over a reference is
 ``dELPD = sum_i (lpd_k,i - lpd_ref,i)``. Held-out points are experiments not used in the calibration or, without
 those, each slug window of the calibration experiments predicted by the model re-fitted without that window
-(leave-one-slug-out, the time-series-safe cross-validation of gap notes §2.6).
+(leave-one-slug-out, the time-series-safe cross-validation; Bürkner, Gabry & Vehtari 2020 on plain LOO
+being optimistic for time series).
 
 Two standard errors are reported. The decision uses the **measurement SE**, the delta-method spread of
 ``dELPD`` over the held-out measurement errors: ``||S_k^-1 w_k - S_ref^-1 w_ref||`` (for ``C = 0`` exactly

@@ -1,4 +1,5 @@
-"""PSIS-LOO of calibrated models on their calibration data (gap notes §3.2-A, §6.1 stage 2: the secondary score).
+"""PSIS-LOO of calibrated models on their calibration data (Vehtari, Gelman &
+Gabry 2017; docs/gap.md, Method: **Scores** — the secondary score).
 
 A fitted model's posterior is the linearised (Laplace) one of :mod:`~spflow.plugins.gap.quantification`:
 unit-box coordinates ``z ~ N(z_hat, C)``, ``C = (J_w' J_w + I / tau^2)^-1``. Along it the whitened calibration
@@ -27,10 +28,10 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass
 
-import arviz as az
 import numpy as np
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.calibration.diagnostics import arviz
 
 from .least_squares import Fit
 from .quantification import parameter_covariance
@@ -69,6 +70,7 @@ def psis_loo(fitted: Fit, tau: float = 0.5, draws: int = 2000, seed: int = 0) ->
     pareto_k = np.full(fitted.residual.size, np.nan)
     terms, ks = ll[0].copy(), np.full(ll.shape[1], np.nan)
     if moved.any():
+        az = arviz()
         data = az.from_dict(posterior={"z": np.zeros((1, draws))}, log_likelihood={"y": ll[None, :, moved]})
         with warnings.catch_warnings():  # k > 0.7 is reported per point (``pareto_k``), not warned about
             warnings.filterwarnings("ignore", message="Estimated shape parameter of Pareto", category=UserWarning)

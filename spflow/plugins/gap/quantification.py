@@ -1,4 +1,4 @@
-"""How far the gap shrinks (gap notes §4.2, §6.1 stage 3): gap closed, RMSE ratios, interval coverage, shifts.
+"""How far the gap shrinks (docs/gap.md, Method: **How far**): gap closed, RMSE ratios, interval coverage, shifts.
 
 * gap-closed fraction on a data set of ``n`` points fitted with ``p`` parameters:
   ``(chi2_before - chi2_after) / (chi2_before - (n - p))`` — 1 when the model after reaches the noise level,

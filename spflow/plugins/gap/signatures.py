@@ -1,4 +1,5 @@
-"""Coreflood signatures and their posterior-predictive p-values (gap notes §2.7: "process-relevant" checks).
+"""Coreflood signatures and their posterior-predictive p-values ("process-relevant" checks in
+the sense of Gupta, Wagener & Liu 2008; docs/gap.md, Method: **Where**).
 
 From the series of one experiment on its grid (NaN where not measured):
 

@@ -1,4 +1,4 @@
-"""The decision rule of a gap diagnosis (gap notes §6.1 stage 2, step 4).
+"""The decision rule of a gap diagnosis (docs/gap.md, Method: **Decision**).
 
 A refitted candidate *passes* when its out-of-sample gain is large and significant, its strength is physical and
 significantly different from the base strength (the effect is present: the "scaling factor != 0" of detection in
@@ -14,7 +14,7 @@ parameters landed elsewhere. The last test is the nested likelihood-ratio test o
 contains the reference at the base strength; ``min_chi2_drop`` is the chi^2_1 quantile at the diagnosis's
 ``alpha``): an effect the calibration data do not ask for is not added, in particular not as a second effect on
 top of a first one whose fit left some misfit. (An effect that is off in the base model can only be added with
-``s >= 0``, so the sign test of the notes is the physical range.)
+``s >= 0``, so the sign test of the rule is the physical range.)
 
 **Competitors** (issue 20). With held-out data, a candidate must also beat the generic-discrepancy competitor
 (:mod:`~spflow.plugins.gap.discrepancy`: a smooth per-slug discrepancy fitted on the calibration data,

@@ -6,7 +6,7 @@ A CDC experiment floods a core at increasing rates (and lower IFT) and records t
 simulator's kernel :func:`spflow.plugins.forward.physics.trapping.residual_saturation`
 ``S_lr = S_lr^high + (S_lr^low - S_lr^high) / (1 + T_l N^tau)`` with ``tau = 1`` as in the thesis and the simulator.
 For 1-D horizontal floods without capillary pressure the capillary number equals the simulator's trapping number
-(UTCHEM ITRAP 1 = 2, physics.md 1.1.1), so the fitted ``T_l`` is the forward model's.
+(UTCHEM ITRAP 1 = 2, UTCHEM-9.0 User's Guide §3.4), so the fitted ``T_l`` is the forward model's.
 
 The table's metadata ``phase`` (1 aqueous, 2 oleic -- the usual waterflood CDC of residual oil --, 3 microemulsion)
 selects the names: ``T11, S1RWC, S1RC`` / ``T22, S2RWC, S2RC`` / ``T33, S3RWC, S3RC``. ``T_l`` spans decades and is

@@ -122,7 +122,7 @@ def synthetic_ift_table(truth: dict[str, float], salinity, surfactant, *, water_
 
 def _start(ratio, sigma, f) -> list[float]:
     """Data-driven start: ``c`` from the large-ratio tail (``sigma ~ c F / R^2``), ``a`` at the low end of UTCHEM's
-    typical range (5; physics.md: 5-20)."""
+    typical range (5; UTCHEM-9.0 User's Guide: 5-20)."""
     tail = ratio >= np.quantile(ratio, 0.5)
     c0 = float(np.median(sigma[tail] * ratio[tail] ** 2 / np.maximum(f[tail], 1e-3)))
     spec = _SPEC["CHUH"]

@@ -1,6 +1,6 @@
 """Bayesian global optimisation of two noisy, minimised objectives with EEIHV (thesis §4.7, Figs. 4.7-4.8).
 
-The loop of Pandita et al. (2018, thesis ref. [214]; notes/uq.md §3.3), with both objectives minimised:
+The loop of Pandita et al. (2018, thesis ref. [214]; docs/eeihv.md §5), with both objectives minimised:
 
 1. evaluate ``n_init`` Latin-hypercube designs (one noisy realisation each);
 2. fit one GP per objective (:class:`.objective_models.ObjectiveGP`, learned noise);

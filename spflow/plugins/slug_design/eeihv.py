@@ -14,8 +14,8 @@ c = (r₂, p₂⁽¹⁾, …, p₂⁽ᵏ⁾). Because ∫_{−∞}^t P(F ≤ z) 
     EEIHV = Σ_i [EI(b_i; μ₁, s₁) − EI(b_{i−1}; μ₁, s₁)] · EI(c_i; μ₂, s₂),   EI(−∞) = 0,
     EI(t; μ, s) = (t − μ) Φ(u) + s φ(u),   u = (t − μ)/s,
 
-and the exact derivatives ∂EI/∂μ = −Φ(u), ∂EI/∂s = φ(u) give the gradient in O(k) (notes/uq.md §3.2, written there
-for maximisation; this is its mirror image). The formula is vectorised over candidates.
+and the exact derivatives ∂EI/∂μ = −Φ(u), ∂EI/∂s = φ(u) give the gradient in O(k) (docs/eeihv.md §2; Pandita et al. 2018
+write it for maximisation, this is its mirror image). The formula is vectorised over candidates.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Uncertainty of the predicted Pareto front: sampled fronts, empirical attainment function, Vorob'ev expectation.
 
-The shaded bands of thesis Figs. 4.7-4.8 (Pandita et al. 2018, notes/uq.md §3.5; Binois, Ginsbourger & Roustant
+The shaded bands of thesis Figs. 4.7-4.8 (Pandita et al. 2018, docs/eeihv.md §7; Binois, Ginsbourger & Roustant
 2015). Each objective's GP posterior of the *latent* objective is sampled jointly at a dense design set (a Latin
 hypercube plus the observed designs); the non-dominated subset of each joint draw is one plausible Pareto front.
 From the sample of fronts (all with moocore, exact, minimisation):

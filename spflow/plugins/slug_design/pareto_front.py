@@ -41,7 +41,8 @@ def hypervolume(values: np.ndarray, reference: np.ndarray) -> float:
 def reference_point(values: np.ndarray, margin: float = 0.1, previous: np.ndarray | None = None) -> np.ndarray:
     """Reference point r = max + margin·(max − min) of ``values`` (n, 2) per objective, never below ``previous``.
 
-    The rule of pydes (notes/uq.md §3.3) mirrored for minimisation: r lies beyond the worst projected value so that
+    The rule of pydes (Pandita et al. 2018; docs/eeihv.md §3) mirrored for minimisation: r lies beyond the worst
+    projected value so that
     every projected design, including the extremes of the front, adds hypervolume; it only ever moves outwards so
     that hypervolumes of later iterations stay comparable. A zero range falls back to a unit margin.
     """

@@ -6,7 +6,8 @@ Stored as arrays, no pickle: ``coefficients`` (output, term), ``multi_index`` (t
 Prediction: the mean is Σ_α y_α Ψ_α(z) at z = :meth:`to_unit` (x). The variance returned by :meth:`predict` is the
 LOO estimate of the proxy's squared error, ε_LOO · Var̂(y) = (1/N) Σ_i (e_i / (1 − h_i))², per output and constant in
 x — a PCE has no pointwise error model, and this is the number calibration adds to a likelihood's noise variance
-(``shared/notes/uq.md`` §4.3). Moments (Eqs. 3.11-3.12) and Sobol indices come from the coefficients
+(docs/surrogates.md, The model; docs/calibration.md, The posterior). Moments (Eqs. 3.11-3.12) and Sobol indices come
+from the coefficients
 (:mod:`.sobol_from_pce`), never from chaospy's symbolic ``Var``/``Sens_*``.
 """
 

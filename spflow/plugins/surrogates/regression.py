@@ -2,7 +2,7 @@
 
 Solves Eq. 3.6, ``y_α = (ΨᵀΨ)⁻¹ Ψᵀ Y``, for every column of ``Y`` through one SVD of Ψ (the hat matrix, its diagonal
 ``h`` and ``tr((ΨᵀΨ)⁻¹)`` depend only on Ψ, so the errors of all outputs cost one factorisation). Conventions follow
-UQLab (``shared/notes/uq.md`` §1.1):
+UQLab (Blatman & Sudret 2011; docs/surrogates.md, Coefficients):
 
 * ``Var̂(y)`` is the population variance (divided by N); a constant output has all errors 0. "Constant" means a
   spread at round-off level, std(y) <= 1e-8 max|y| (:func:`is_constant`): the simulator's recovery before breakthrough

@@ -1,4 +1,4 @@
-"""Langmuir adsorption of surfactant and polymer (thesis Eqs. 2.15-2.16; UTCHEM, physics.md 1.1.2).
+"""Langmuir adsorption of surfactant and polymer (thesis Eqs. 2.15-2.16; UTCHEM-9.0 Technical Documentation §2).
 
 Units (UTCHEM pore-volume convention): surfactant concentrations as volume fractions, polymer in wt %; ``a`` is
 dimensionless, ``b`` is the inverse of the concentration unit (vol/vol for surfactant, 1/(wt %) for polymer);
@@ -47,5 +47,6 @@ def langmuir_adsorbed(c_total, a, b):
 
 @njit(cache=True, error_model="numpy")
 def retardation(a, b, c_inj):
-    """Dilute pore-volume retardation ``D = C_hat(C_J) / C_J = a / (1 + b C_J)`` (physics.md 1.1.2), dimensionless."""
+    """Dilute pore-volume retardation ``D = C_hat(C_J) / C_J = a / (1 + b C_J)`` (UTCHEM-9.0 Technical Documentation
+    §2), dimensionless."""
     return a / (1.0 + b * c_inj)

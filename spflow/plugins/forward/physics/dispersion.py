@@ -1,4 +1,4 @@
-"""Longitudinal hydrodynamic dispersion in 1-D (thesis Eq. 1.9; physics.md 1.1.2)."""
+"""Longitudinal hydrodynamic dispersion in 1-D (thesis Eq. 1.9; UTCHEM-9.0 Technical Documentation §2)."""
 
 from numba import njit
 

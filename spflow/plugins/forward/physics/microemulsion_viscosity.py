@@ -11,7 +11,8 @@ def microemulsion_viscosity(c1, c2, c3, mu_w, mu_o, av1, av2, av3, av4, av5):
 
     ``c1..c3`` volume fractions of water, oil and surfactant in the phase; ``mu_w`` the aqueous (or polymer-solution)
     viscosity and ``mu_o`` the oil viscosity in cP; ``av3`` in cP, the other ALPHAV dimensionless. The thesis prints
-    the last exponent as ``a4 C13 + a5 C33``; the UTCHEM form of physics.md 1.1.2 (``a4 C1 + a5 C2``) is used. With
+    the last exponent as ``a4 C13 + a5 C33``; the form of the UTCHEM-9.0 Technical Documentation §2 (``a4 C1 + a5
+    C2``) is used. With
     the thesis values (a3 = 0) the third term vanishes and the two forms coincide.
     """
     return (

@@ -1,7 +1,8 @@
 """Surfactant/brine/oil phase behaviour: Hand's rule binodal and a Winsor II(-)/III/II(+) flash (UTCHEM, IFGHBN = 0).
 
 Pseudo-ternary water (1) / oil (2) / surfactant (3) in volume fractions; salinities in meq/ml. Phases: 1 aqueous
-(excess water), 2 oleic (excess oil), 3 microemulsion (ME). Thesis section 2.5 and physics.md 1.1.2 / 2.6.
+(excess water), 2 oleic (excess oil), 3 microemulsion (ME). Thesis section 2.5 and UTCHEM-9.0 Technical Documentation
+§2; docs/forward_model.md, Property values.
 
 Binodal (Hand's rule, B = -1): ``C3^2 = A C1 C2``. Writing ``w = C2 / (C1 + C2)`` and ``q = sqrt(A w (1 - w))``,
 the binodal point at normalised oil fraction ``w`` is ``(1 - w, w, q) / (1 + q)``; its maximum height (``w = 1/2``)
@@ -13,7 +14,8 @@ Tie-lines (plait points at the apices, C2PRC = 0 / C2PLC = 1, as in thesis Table
 - Type II(-), ``C_SE < CSEL``: every tie-line passes through the oil apex O = (0, 1, 0). The ME (reported as phase 3,
   the water-rich lower phase) lies where the ray from O through ``z`` meets the binodal; excess oil is pure oil
   (phase 2) and ``s1 = 0``. With ``D = z3^2 + A z1 (z1 + z3)``: ME = ``(A z1^2, z3^2, A z1 z3) / D``, ME fraction
-  ``D / (A z1)`` and excess oil ``(A z1 z2 - z3^2) / (A z1)`` -- the closed form of physics.md 2.6
+  ``D / (A z1)`` and excess oil ``(A z1 z2 - z3^2) / (A z1)`` -- the closed form of docs/forward_model.md, Property
+  values
   (``t = A z1 / (z3^2 + A z1 (1 - z2))``, ME = ``(t z1, 1 + t (z2 - 1), t z3)``, ME fraction ``1/t``) rearranged so
   that no term cancels.
 - Type II(+), ``C_SE > CSEU``: the mirror image -- tie-lines through the water apex W = (1, 0, 0), oil-rich ME
@@ -55,7 +57,8 @@ def hand_a(c3max):
 
 @njit(cache=True, error_model="numpy")
 def hand_a_salinity(cse, csel, cseu, c3max0, c3max1, c3max2):
-    """Hand's ``A`` at effective salinity ``cse`` (meq/ml), linear in ``C_SE / C_SEOP`` (physics.md 1.1.2).
+    """Hand's ``A`` at effective salinity ``cse`` (meq/ml), linear in ``C_SE / C_SEOP`` (UTCHEM-9.0 Technical
+    Documentation §2).
 
     ``A_m = hand_a(C3max,m)`` for the binodal heights at zero (m = 0, HBNC70), optimal (1, HBNC71) and twice-optimal
     (2, HBNC72) salinity; ``C_SEOP = (CSEL + CSEU)/2``;

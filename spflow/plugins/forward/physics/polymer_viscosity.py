@@ -12,7 +12,7 @@ def zero_shear_viscosity(mu_w, cp, csep, ap1, ap2, ap3, sslope, cse1):
     """``mu_p0 = mu_w [1 + (AP1 Cp + AP2 Cp^2 + AP3 Cp^3) C_SEP^SSLOPE]`` (cP), Eqs. 2.1-2.2.
 
     The thesis prints the bracket as ``(A1 + A2 Cp^2 + A3 Cp^3)``, which drops a ``Cp`` from the first term; the
-    UTCHEM form of physics.md 1.1.2 (``AP1 Cp``) is used, so that ``mu_p0 = mu_w`` at ``Cp = 0``.
+    UTCHEM form of UTCHEM-9.0 Technical Documentation §2 (``AP1 Cp``) is used, so that ``mu_p0 = mu_w`` at ``Cp = 0``.
     Choice for CSE1: the UTCHEM guide defines CSE1 as the salinity below which the polymer viscosity is salinity
     independent, so ``C_SEP`` is floored at CSE1 (``max(csep, cse1)``) -- the viscosity is continuous in salinity and
     stays finite as ``csep -> 0`` for a negative SSLOPE (HPAM).

@@ -2,7 +2,8 @@
 
 Units: viscosities in cP, shear rates in 1/s, polymer concentration in wt %, effective salinity in meq/ml.
 
-In-situ shear-rate convention (UTCHEM, physics.md 1.1.2): ``gamma_eq = GAMMAC |u| / sqrt(k k_r phi S)`` with GAMMAC
+In-situ shear-rate convention (UTCHEM-9.0 Technical Documentation §2): ``gamma_eq = GAMMAC |u| / sqrt(k k_r phi S)``
+with GAMMAC
 kept in UTCHEM field units (IUNIT = 0), day darcy^(1/2) / (ft s), so that the thesis value GAMMAC = 40 (Table 2.4,
 taken from a UTCHEM field-unit deck) can be used verbatim. The kernel takes SI inputs (``u`` in m/s, ``k`` in m^2)
 and converts them internally to ft/day and darcy. In SI the law reads
@@ -57,7 +58,8 @@ def half_shear_rate(csep, cp, a0, a1, a2):
 
 @njit(cache=True, error_model="numpy")
 def equivalent_shear_rate(u, k, kr, phi, s, gammac):
-    """UTCHEM in-situ shear rate ``gamma_eq = GAMMAC |u| / sqrt(k k_r phi S)`` (1/s), physics.md 1.1.2.
+    """UTCHEM in-situ shear rate ``gamma_eq = GAMMAC |u| / sqrt(k k_r phi S)`` (1/s), UTCHEM-9.0 Technical
+    Documentation §2.
 
     ``u`` Darcy flux of the polymer-carrying phase in m/s, ``k`` permeability along the flow in m^2, ``kr`` relative
     permeability, ``phi`` porosity, ``s`` phase saturation, ``gammac`` in UTCHEM field units day darcy^(1/2)/(ft s)

@@ -1,5 +1,5 @@
 """Capillary desaturation: trapping number, residual saturations and end-point interpolation (thesis Eqs. 2.12-2.13;
-UTCHEM ITRAP, physics.md 1.1.2)."""
+UTCHEM ITRAP, UTCHEM-9.0 Technical Documentation §2)."""
 
 import math
 
