@@ -33,6 +33,7 @@ import numpy as np
 import xarray as xr
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.design.parameter_map import NAMES_VAR, ParameterMap
 from spflow.plugins.forward import effects as E
 from spflow.plugins.forward.parameters import PARAMETERS
 from spflow.plugins.forward.schedule import as_schedule
@@ -156,23 +157,24 @@ def _dataset(source, what: str, needs: tuple[str, ...], stages: str) -> tuple[xr
     return ds, where
 
 
-def _named(names, values, where: str, study) -> dict[str, float]:
-    """Forward-model parameters of a calibration's ``param`` labels: a forward-model name, or a study's
-    calibrated label with several ``names`` (each takes the value)."""
-    out: dict[str, float] = {}
-    space = {} if study is None else study.parameter_space
-    for label, value in zip(names, values):
-        label = str(label)
+def _named(ds: xr.Dataset, values, where: str, study) -> dict[str, float]:
+    """Forward-model parameters of a calibration's or posterior's point ``values`` (one per ``param`` label) through
+    the parameter map the Dataset carries (:mod:`spflow.plugins.design.parameter_map`); a file written before the
+    map was recorded: a label is a forward-model name, or a study's calibrated label with several ``names`` (each
+    takes the value)."""
+    labels = [str(label) for label in ds["param"].values]
+    for label, value in zip(labels, values):
         if not np.isfinite(value):
             raise ParameterError(f"{where}: parameter {label!r} is {value!r}, not a finite number")
-        if label in _SPECS:
-            out[label] = float(value)
-        elif label in space:
-            out.update({n: float(value) for n in space[label]["names"]})
-        else:
-            raise ParameterError(f"{where}: parameter {label!r} is neither a forward-model parameter nor a "
-                                 f"calibrated label of the study (labels: {sorted(space)})")
-    return out
+    if NAMES_VAR in ds:
+        return ParameterMap.of(ds).forward_params(values)
+    space = {} if study is None else study.parameter_space
+    unknown = [label for label in labels if label not in _SPECS and label not in space]
+    if unknown:
+        raise ParameterError(f"{where}: parameter {unknown[0]!r} is neither a forward-model parameter nor a "
+                             f"calibrated label of the study (labels: {sorted(space)})")
+    names = tuple(tuple(space[label]["names"]) if label not in _SPECS else (label,) for label in labels)
+    return ParameterMap(tuple(labels), names, (False,) * len(labels)).forward_params(values)
 
 
 def calibration_parameters(calibration, study=None) -> tuple[dict[str, float], str]:
@@ -183,7 +185,7 @@ def calibration_parameters(calibration, study=None) -> tuple[dict[str, float], s
                          "the nsga2_calibration stage (version 3 or later; rerun the node for an older file)")
     chi2 = ds.attrs.get("confidence_chi2_min")
     detail = "confidence_best, the minimum-chi2 design" + ("" if chi2 is None else f" (chi2 = {float(chi2):.6g})")
-    return _named(ds["param"].values, ds["confidence_best"].values.astype(float), where, study), f"{where} {detail}"
+    return _named(ds, ds["confidence_best"].values.astype(float), where, study), f"{where} {detail}"
 
 
 def posterior_parameters(posterior, draw, study=None) -> tuple[dict[str, float], str]:
@@ -205,7 +207,7 @@ def posterior_parameters(posterior, draw, study=None) -> tuple[dict[str, float],
             raise ParameterError(f"{where}: draw = {draw!r}; allowed 'mean' or an integer in [0, {flat.shape[0] - 1}]"
                                  f" ({n_chain} chains x {n_draw} draws, chain-major)")
         values, detail = flat[k], f"draw {k} (chain {k // n_draw}, draw {k % n_draw})"
-    return _named(ds["param"].values, values, where, study), f"{where} {detail}"
+    return _named(ds, values, where, study), f"{where} {detail}"
 
 
 def _space_mismatch(values: Mapping[str, float], study, source: str) -> list[str]:

@@ -3,9 +3,11 @@
 The thesis's §4.5-4.6 as one cached DAG on a study's corefloods (default: the bundled study, BCF1-3; or any
 coreflood files with the study's names, e.g. synthetic twins). The study's ``calibration`` experiments train the proxy
 and the posterior, its ``heldout`` ones are predicted (bundled: BCF1 + BCF2 train, BCF3 is held out;
-``profile="thesis"``: BCF1 alone trains, as in the thesis):
+``profile="thesis"``: BCF1 alone trains and Table 4.1 is the prior, as in the thesis):
 
-1. ``space``: the Table 4.1 ranges (uniform prior, Eq. 4.2).
+1. ``space``: the study's calibrated parameters (uniform prior, Eq. 4.2, in each design column: a log-scale
+   parameter's column is log10 of its value, so its prior is log-uniform); bundled: the Table 3.2 ranges.
+   ``profile="thesis"``: thesis Table 4.1 (narrower than Table 3.2; n_high / n_low = the oleic exponents).
 2. ``design`` (Latin hypercube) -> ``responses`` (simulator on the training corefloods, each with its own core, rate
    and schedule) -> ``surrogate``: the ``pce`` stage on pressure drop and oil cut of the training corefloods (§4.5).
    Swap the proxy with ``surrogate="pck"`` (or ``p.set_stage("surrogate", "pck", {...})``): every surrogate stage
@@ -27,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import spflow
-from spflow.pipelines.history_matching import study_inputs
+from spflow.pipelines.history_matching import space_params, study_inputs
 from spflow.plugins.design.thesis_tables import TABLE_4_1
 
 QOIS = ["dp", "oil_cut"]
@@ -48,7 +50,7 @@ def pipeline(samples: int = 300, cells: int = 100, degree_max: int = 3, sampler:
     observed_all = inputs.forward(inputs.observed)
     model = {"cells": cells, **inputs.model()}
     p = spflow.Pipeline("bayesian_calibration_quick" if quick else "bayesian_calibration")
-    p.add("space", "parameter_space", params={"names": list(TABLE_4_1), "ranges": TABLE_4_1})
+    p.add("space", "parameter_space", params=space_params(inputs, profile, TABLE_4_1))
     p.add("design", "lhs_design", inputs={"space": "space"}, params={"samples": samples, "seed": seed})
     p.add("responses", "forward", inputs={"design": "design"},
           params={"experiments": inputs.forward(inputs.training), **model})

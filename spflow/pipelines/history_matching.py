@@ -2,8 +2,12 @@
 
 The thesis's §3.3-3.7 as one cached DAG on a study's corefloods (default: the bundled study, BCF1-3):
 
-1. ``space``: the Table 3.2 ranges; optionally ``screening`` (Sobol' indices on the forward model) and
-   ``screened_space`` (the parameters it keeps) in front of the design.
+1. ``space``: the study's calibrated parameters (``[parameters.calibrated]``: one design column per label, which may
+   set several UTCHEM names, e.g. ``n_high`` = the Corey exponents ``E1C``-``E3C``; the bundled study: the Table 3.2
+   ranges with n_high / n_low moving all three phases' exponents, as its data's truth does); ``profile="thesis"``:
+   thesis Table 3.2 as the thesis pipeline used it (n_high / n_low = the oleic exponents ``E2C`` / ``E2WC``).
+   Optionally ``screening`` (Sobol' indices on the forward model) and ``screened_space`` (the parameters it keeps)
+   in front of the design.
 2. ``design`` (Latin hypercube, N_s points) -> ``responses`` (simulator on the training corefloods, each with its own
    core, rate and schedule).
 3. ``surrogate``: the ``pce`` stage on dp and recovery of the training corefloods, hybrid LARS up to degree 5 (swap
@@ -16,9 +20,9 @@ The thesis's §3.3-3.7 as one cached DAG on a study's corefloods (default: the b
    (simulator on every observed coreflood at all of them) for Figs. 3.11-3.13.
 
 Roles come from the study: ``calibration`` experiments train, ``heldout`` ones are held out (the bundled study: BCF1
-+ BCF2 train, BCF3 is held out). ``profile="thesis"`` is the thesis's set-up instead: the first calibration
-experiment alone trains (BCF1) and every other observed one is held out (BCF2, BCF3); BCF1 leaves HBNC71
-undetermined, so the held-out fit of BCF2/BCF3 is not constrained there (docs/calibration.md).
++ BCF2 train, BCF3 is held out). ``profile="thesis"`` is the thesis's set-up instead: the thesis's Table 3.2 space,
+the first calibration experiment alone trains (BCF1) and every other observed one is held out (BCF2, BCF3); BCF1
+leaves HBNC71 undetermined, so the held-out fit of BCF2/BCF3 is not constrained there (docs/calibration.md).
 
 Every node is cached by provenance: changing only the GA's settings (e.g. ``generations``) reruns ``calibration``
 and what follows it, nothing upstream.
@@ -36,8 +40,16 @@ import spflow
 from spflow.plugins.design.thesis_tables import TABLE_3_2
 from spflow.study.pipeline_inputs import StudyInputs
 
-#: ``profile`` values: the study's roles, or the thesis's single training coreflood.
+#: ``profile`` values: the study's roles and parameter space, or the thesis's single training coreflood and tables.
 PROFILES = ("study", "thesis")
+
+
+def space_params(inputs: StudyInputs, profile: str, table: dict) -> dict:
+    """The ``parameter_space`` stage's parameters under ``profile``: the study's calibrated parameters, or
+    (``"thesis"``) the thesis's ``table`` (Table 3.2 for chapter 3, Table 4.1 for chapter 4)."""
+    if profile not in PROFILES:
+        raise spflow.ParameterError(f"profile {profile!r} is not one of {list(PROFILES)}")
+    return {"names": list(table), "ranges": table} if profile == "thesis" else inputs.space()
 
 
 def study_inputs(study=None, profile: str = "study") -> StudyInputs:
@@ -61,7 +73,8 @@ def pipeline(samples: int = 200, cells: int = 100, generations: int = 100, popul
              study=None, profile: str = "study", observed: list[str] | None = None,
              quick: bool = False) -> spflow.Pipeline:
     """The chapter-3 DAG on ``study`` (a study file, a :class:`~spflow.study.Study`, or ``None``: the bundled
-    study). ``profile``: ``"study"`` (roles) or ``"thesis"`` (BCF1-only training); ``observed``: coreflood files
+    study). ``profile``: ``"study"`` (roles, the study's space) or ``"thesis"`` (BCF1-only training, Table 3.2);
+    ``observed``: coreflood files
     replacing the study's data (their ``experiment`` attrs must be the study's names, e.g. synthetic twins);
     ``screening``: put a Sobol' screening of the space in front of the design; ``quick``: small budgets."""
     if quick:
@@ -70,7 +83,7 @@ def pipeline(samples: int = 200, cells: int = 100, generations: int = 100, popul
     train = inputs.forward(inputs.training)
     model = {"cells": cells, **inputs.model()}
     p = spflow.Pipeline("history_matching_quick" if quick else "history_matching")
-    p.add("space", "parameter_space", params={"names": list(TABLE_3_2), "ranges": TABLE_3_2})
+    p.add("space", "parameter_space", params=space_params(inputs, profile, TABLE_3_2))
     space = "space"
     if screening:
         p.add("screening", "sobol_screening", inputs={"space": "space"},

@@ -2,17 +2,19 @@
 
 Default study: the bundled BCF1-3 (BCF1 + BCF2 calibrate, BCF3 is held out); ``--study FILE`` runs it on yours, with
 the study's roles deciding which corefloods train the proxies and calibrations and which are held out;
-``--profile thesis`` is the thesis's BCF1-only training (see ``history_matching``).
+``--profile thesis`` is the thesis's BCF1-only training on the thesis's tables (see ``history_matching``).
 
 1. ``screening.*``: Sobol' screening of the Table 3.1 sub-models on the first training coreflood (Fig. 3.2;
    pipeline ``screening``).
-2. ``hm.*``: chapter 3 -- Table 3.2 design -> simulator -> PCE -> NSGA-II on the training corefloods, checked on the
-   held-out ones (Figs. 3.10-3.14; pipeline ``history_matching``).
+2. ``hm.*``: chapter 3 -- design over the study's calibrated parameters (``--profile thesis``: Table 3.2) ->
+   simulator -> PCE -> NSGA-II on the training corefloods, checked on the held-out ones (Figs. 3.10-3.14; pipeline
+   ``history_matching``).
 3. ``proxy.*``: the chapter-3 proxies checked on independent simulator runs: the PCE and a PC-Kriging model on the
    same training runs (Figs. 3.4-3.5, 3.8, 3.15), and the PCE's convergence with the design size (Algorithm 2,
    Fig. 3.3).
-4. ``bc.*``: chapter 4 -- Table 4.1 design -> PCE -> MCMC -> posterior predictive on every observed coreflood
-   (Apps. B-E, Figs. 4.4-4.5; pipeline ``bayesian_calibration``).
+4. ``bc.*``: chapter 4 -- design over the study's calibrated parameters (``--profile thesis``: Table 4.1) -> PCE ->
+   MCMC -> posterior predictive on every observed coreflood (Apps. B-E, Figs. 4.4-4.5; pipeline
+   ``bayesian_calibration``).
 5. ``slug.*``: slug sizes designed under the posterior with EEIHV on the study's reference flood, oil price
    drifting up and down (Figs. 4.6-4.10; pipeline ``slug_design``).
 6. ``gap.*``: where the calibrated model misses the data and which unmodelled effect explains it

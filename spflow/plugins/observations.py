@@ -10,6 +10,15 @@ interpolated:
 * ``oil_cut``, ``c_polymer_out``, ``c_surfactant_out``, ``salinity_out`` (tube averages) — the volume average of the
   tubes over the simulator's interval ``(pv - Δ, pv]``, which is what the simulator reports there.
 
+The effluent variables (``recovery`` and the tube averages) are first moved back by the outlet dead volume the
+coreflood records (``dead_volume="correct"``, the default): a collector behind a line of ``v = noise_dead_volume_ml /
+pore_volume_ml`` PV receives the core's effluent of ``(a, b]`` during ``(a + v, b + v]`` (plug flow in the line,
+:mod:`spflow.synthetic.dead_volume`), so a tube ``(a, b]`` holds the core outlet's ``(a - v, b - v]`` and the
+simulator, which reports at the core outlet, compares with it directly. Tubes that hold line fill (``a < v``) are
+dropped from the averaged variables; cumulative recovery at ``b - v`` is exact. The shift used per experiment is the
+output's ``dead_volume_pv`` (0 where the coreflood records no dead volume or pore volume: nothing to correct);
+``dead_volume="keep"`` compares the readings as measured.
+
 Grid points the data does not cover (before the first sample, after the last tube, or intervals touching a tube
 without a value) are NaN. The output has dims (``experiment``, ``pv``) like one sample of the ``forward`` stage's
 responses, with each experiment's ``total_pv``. Its JSON attr ``coreflood_attrs`` maps each experiment to its
@@ -34,7 +43,7 @@ from spflow.io.format import VARIABLES
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.forward.simulate import common_grid, output_grid
 
-__all__ = ["Observations", "OBSERVATIONS", "on_simulator_grid"]
+__all__ = ["Observations", "OBSERVATIONS", "at_core_outlet", "dead_volume_pv", "on_simulator_grid"]
 
 _AVERAGED = ("oil_cut", "c_polymer_out", "c_surfactant_out", "salinity_out")
 _ALLOWED = ("dp", "recovery", *_AVERAGED)
@@ -75,6 +84,31 @@ def _point(x: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
     return np.interp(grid, x[keep], y[keep], left=np.nan, right=np.nan) if keep.any() else np.full(grid.size, np.nan)
 
 
+def dead_volume_pv(ds: xr.Dataset) -> float:
+    """The outlet dead volume a coreflood records, in PV (``noise_dead_volume_ml / pore_volume_ml``); 0 when it
+    records no dead volume or no pore volume."""
+    volume, pore = ds.attrs.get("noise_dead_volume_ml"), ds.attrs.get("pore_volume_ml")
+    if volume is None or pore is None:
+        return 0.0
+    return float(volume) / float(pore)
+
+
+def at_core_outlet(ds: xr.Dataset, shift: float) -> xr.Dataset:
+    """``ds`` with its tubes moved back by ``shift`` PV (the outlet dead volume, module docstring): tube bounds
+    ``- shift``; averaged variables of tubes that start before the core's effluent reaches the collector are NaN,
+    recovery at tube ends at or before 0 PV is NaN."""
+    if shift == 0.0 or "pv_tube_end" not in ds.coords:
+        return ds
+    out = ds.assign_coords(pv_tube_start=ds["pv_tube_start"] - shift, pv_tube_end=ds["pv_tube_end"] - shift)
+    flushing = out["pv_tube_start"].values < -1e-12
+    for name in _AVERAGED:
+        if name in out:
+            out[name] = out[name].where(~flushing)
+    if "recovery" in out:
+        out["recovery"] = out["recovery"].where(out["pv_tube_end"] > 1e-12)
+    return out
+
+
 def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, step: float) -> dict[str, np.ndarray]:
     """Each requested variable of coreflood ``ds`` on ``grid`` (spacing ``step``), NaN where it has no data."""
     out = {}
@@ -92,7 +126,7 @@ def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, st
 
 class Observations(Stage):
     name = "observations"
-    version = "2"
+    version = "3"
     description = "measured corefloods (bundled names or files) on the simulator's output grid"
     output = OBSERVATIONS
     params = {
@@ -101,6 +135,9 @@ class Observations(Stage):
                                  "{name, data, sha256, attrs} mappings"),
         "variables": Param(list, ["dp", "oil_cut", "recovery"], choices=list(_ALLOWED), doc="measured variables"),
         "pv_step": Param(float, 0.1, bounds=(1e-4, 1.0), unit="PV", doc="simulator output grid spacing"),
+        "dead_volume": Param(str, "correct", choices=["correct", "keep"],
+                             doc="correct: effluent series moved back by the outlet dead volume each coreflood records "
+                                 "(to the core outlet the simulator reports at); keep: as measured"),
     }
 
     def _load(self) -> list[xr.Dataset]:
@@ -132,13 +169,16 @@ class Observations(Stage):
         totals = np.array([as_schedule(json.loads(ds.attrs["schedule"])).total_pv for ds in data])
         grid, positions = common_grid(totals, step)
         values = {name: np.full((len(data), grid.size), np.nan) for name in variables}
+        shifts = np.array([dead_volume_pv(ds) if self.params["dead_volume"] == "correct" else 0.0 for ds in data])
         for i, ds in enumerate(data):
             own = output_grid(float(totals[i]), step)
-            for name, series in on_simulator_grid(ds, variables, own, step).items():
+            for name, series in on_simulator_grid(at_core_outlet(ds, float(shifts[i])), variables, own, step).items():
                 values[name][i, positions[i]] = series
         out = xr.Dataset(
             {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1]}) for name, v in values.items()}
-            | {"total_pv": ("experiment", totals, {"units": "PV"})},
+            | {"total_pv": ("experiment", totals, {"units": "PV"}),
+               "dead_volume_pv": ("experiment", shifts, {"units": "PV", "long_name": "outlet dead volume the "
+                                                          "effluent series were moved back by"})},
             coords={"experiment": names, "pv": grid},
             attrs={"pv_step": step, "sources": " ".join(map(source_label, self.params["experiments"])),
                    "coreflood_attrs": json.dumps({n: _json_attrs(ds.attrs) for n, ds in zip(names, data)})},

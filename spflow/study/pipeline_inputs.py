@@ -2,8 +2,8 @@
 calibrations (role ``calibration``) and which are held out (role ``heldout``), each as the ``forward`` stage's
 ``{name, schedule, params}`` mapping (its own core, rate, fluids and schedule) and as the ``observations`` /
 ``diagnose`` stages' ``{name, data, sha256, attrs}`` mapping (its data file, digest and resolved metadata), plus the
-study-wide fixed parameters and base-model effects. Every such value enters the nodes' parameters, so the provenance
-keys see an edited study or data file and rerun exactly what depends on it.
+study-wide fixed parameters, base-model effects and calibrated parameter space. Every such value enters the nodes'
+parameters, so the provenance keys see an edited study or data file and rerun exactly what depends on it.
 
 ``resolve_study(None)`` is the bundled study (:func:`spflow.bundled_study`), so a pipeline built without a study runs
 on BCF1-3 as before.
@@ -93,6 +93,12 @@ class StudyInputs:
     def observations(experiments) -> list[dict]:
         """The ``observations`` / ``diagnose`` stages' sources for ``experiments``."""
         return [e.observation_source() for e in experiments]
+
+    def space(self) -> dict:
+        """The ``parameter_space`` stage's parameters of the study's calibrated parameters (``[parameters.calibrated]``:
+        one design column per label, a label setting one or several UTCHEM names, linear or log scale)."""
+        space = self.study.parameter_space
+        return {"names": list(space), "ranges": {label: dict(spec) for label, spec in space.items()}}
 
     def model(self) -> dict:
         """The study-wide forward-model settings every simulating node takes: ``fixed`` and ``effects``."""

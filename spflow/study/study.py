@@ -33,7 +33,8 @@ class Study:
         path: the study file (``None`` if built in memory).
         experiments: the experiments in file order.
         parameter_space: calibrated parameters, ``{label: {"names": [...], "range": [low, high], "scale": ...}}``
-            (the ``[parameters]`` table of a gap-diagnosis base model, :mod:`spflow.plugins.gap.base_model`).
+            (the ``[parameters]`` table of a gap-diagnosis base model, :mod:`spflow.plugins.gap.base_model`, and the
+            ``parameter_space`` stage's ``ranges``: the space the chapter-3/4 pipelines calibrate).
         fixed: study-wide fixed forward-model parameters ``{name: value}``.
         effects: the base model's strength of every registered effect.
         defaults_taken: every default the study took, in order.

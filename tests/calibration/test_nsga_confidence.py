@@ -2,6 +2,9 @@
 region against the analytic confidence ellipsoid of a linear-Gaussian model and its coverage over noise draws, the
 measurement model carried by the observations stage, and the stage's new outputs."""
 
+import itertools
+from dataclasses import replace
+
 import numpy as np
 import xarray as xr
 import pytest
@@ -19,7 +22,7 @@ from spflow.plugins.calibration.nsga2_stage import NSGA2Calibration
 from spflow.plugins.design.parameter_space import ParameterSpace
 from spflow.plugins.gap.error_model import BlockErrorModel
 from spflow.plugins.gap.observed import load_experiments, observed_experiment
-from spflow.plugins.observations import Observations
+from spflow.plugins.observations import Observations, at_core_outlet
 from spflow.synthetic import NoiseModel
 
 LEVEL = 0.95
@@ -158,11 +161,16 @@ def test_bad_levels_and_chi2_values_are_refused():
 # --- the measurement model through the observations stage ----------------------------------------------------------
 
 def test_observations_carry_the_measurement_model(tmp_path):
-    obs = Observations().run(CTX)
-    for name in ("BCF1", "BCF2"):
-        direct = load_experiments([name], 0.1)[0]
+    kept = Observations(dead_volume="keep").run(CTX)
+    corrected = Observations().run(CTX)  # effluent series moved back by the files' 2 ml outlet line
+    for name, obs in itertools.product(("BCF1", "BCF2"), (kept, corrected)):
+        ds = load_coreflood(name)
+        if obs is corrected:  # the file with its effluent at the core outlet; no dead volume left in the model
+            ds = at_core_outlet(ds, ds.attrs["noise_dead_volume_ml"] / ds.attrs["pore_volume_ml"])
+        direct = load_experiments([ds], 0.1)[0]
         carried = observed_experiment(obs, name)
-        assert carried.measurement == direct.measurement and carried.noise_from_data
+        expected = direct.measurement if obs is kept else replace(direct.measurement, dead_volume_ml=0.0)
+        assert carried.measurement == expected and carried.noise_from_data
         assert carried.core == direct.core and carried.schedule == direct.schedule
         assert (carried.pore_volume_ml, carried.ooip_ml) == (direct.pore_volume_ml, direct.ooip_ml)
         np.testing.assert_array_equal(carried.pv, direct.pv)

@@ -6,6 +6,7 @@ import pytest
 import xarray as xr
 
 from spflow.core.errors import ParameterError, SpflowError
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.gap.base_calibration import calibrate_base, parameter_set_starts
 from spflow.plugins.gap.base_model import BaseModel
 from spflow.plugins.gap.catalogue import CandidateEffect
@@ -78,6 +79,11 @@ def test_given_parameter_sets_pick_the_best_member():
     assert result.nfev == 0 and result.chi2 < 1e-20
     with pytest.raises(ParameterError, match="lack parameter 'GAMHF'"):
         parameter_set_starts(BASE, sets.assign_coords(param=["AD31", "X"]))
+    # the same members as a design of a log-scale GAMHF column (log10 of the value, as the parameter_space stage
+    # writes it): the map the design carries gives the same starting points
+    logged = ParameterMap(("AD31", "GAMHF"), (("AD31",), ("GAMHF",)), (False, True)).design(
+        [[0.2, np.log10(90.0)], [1.5, np.log10(30.0)], [1.0, np.log10(50.0)]])
+    np.testing.assert_allclose(parameter_set_starts(BASE, logged), starts, rtol=1e-12)
 
 
 LINEAR = BaseModel.from_mapping({"parameters": {"AD31": [0.0, 2.0], "CRK": [0.0, 1.0]}})

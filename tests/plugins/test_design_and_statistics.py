@@ -27,7 +27,8 @@ def test_relative_space_is_plus_minus_20_percent_around_defaults(tmp_path):
 def test_explicit_ranges_and_bad_ranges(tmp_path):
     space = _space(tmp_path, names=["HBNC70"], ranges={"HBNC70": [0.02, 0.05]})
     assert space["lower"].values.tolist() == [0.02] and space["upper"].values.tolist() == [0.05]
-    with pytest.raises(spflow.ParameterError, match="range of HBNC70 = \\[0.05, 0.02\\] must satisfy low < high"):
+    with pytest.raises(spflow.ParameterError,
+                       match="'ranges' 'HBNC70': range \\[0.05, 0.02\\] must have lower < upper"):
         _space(tmp_path, names=["HBNC70"], ranges={"HBNC70": [0.05, 0.02]})
     with pytest.raises(spflow.ParameterError, match="unknown forward-model parameter 'NOPE'"):
         _space(tmp_path, names=["NOPE"])

@@ -60,6 +60,36 @@ def test_noise_free_twin_matches_the_simulation_it_was_made_from():
     assert list(out["experiment"].values) == ["BCF1"] and np.isfinite(out["dp"].values[0, :-1]).all()
 
 
+def test_dead_volume_is_taken_out_of_the_effluent_series(tmp_path):
+    """A noise-free twin behind an outlet line of 0.05 PV: corrected, its recovery and oil cut are the simulation's at
+    the core outlet (the line is a pure translation by 0.05 PV); kept as measured, recovery lags by 0.05 PV and dp,
+    read at the inlet, is the same either way."""
+    fine = simulate("BCF1", cells=40, pv_step=0.005)
+    pore_ml = make_coreflood("BCF1", noise=NoiseModel.exact(), cells=40, pv_step=0.005).attrs["pore_volume_ml"]
+    data = make_coreflood("BCF1", noise=NoiseModel.exact(dead_volume_ml=0.05 * pore_ml), cells=40, pv_step=0.005)
+    data.to_netcdf(tmp_path / "bcf1.nc")
+    corrected = Observations(experiments=[str(tmp_path / "bcf1.nc")]).run(StageContext("obs")).isel(experiment=0)
+    kept = Observations(experiments=[str(tmp_path / "bcf1.nc")], dead_volume="keep").run(StageContext("obs"))
+    kept = kept.isel(experiment=0)
+    assert float(corrected["dead_volume_pv"]) == pytest.approx(0.05, rel=1e-12)
+    assert float(kept["dead_volume_pv"]) == 0.0
+    grid = corrected["pv"].values
+    at = np.searchsorted(fine["pv"].values, grid - 1e-9)
+    recovery = corrected["recovery"].values
+    finite = np.isfinite(recovery)
+    assert finite[1:-2].all()  # the last tube now ends at 4.15 PV: nothing at 4.2 and at the 4.23-PV end
+    np.testing.assert_allclose(recovery[finite], fine["recovery"].values[at][finite], rtol=1e-9, atol=1e-12)
+    cut = corrected["oil_cut"].values
+    fine_cut = np.full(grid.size, np.nan)  # the simulation's mean over each (pv - 0.1, pv] up to 4.2 PV
+    fine_cut[1:43] = fine["oil_cut"].values[1:841].reshape(-1, 20).mean(axis=1)
+    ok = np.isfinite(cut)
+    assert ok[1:-2].all()  # the line-flush tube (-0.05, 0] is dropped; it overlaps no interval after 0
+    np.testing.assert_allclose(cut[ok], fine_cut[ok], atol=1e-12)
+    lagged = np.interp(grid - 0.05, fine["pv"].values, fine["recovery"].values)
+    np.testing.assert_allclose(kept["recovery"].values[1:-1], lagged[1:-1], rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(kept["dp"].values, corrected["dp"].values)
+
+
 def test_bad_experiment_is_named_before_work(tmp_path):
     with pytest.raises(ParameterError, match="nope.nc"):
         Observations(experiments=[str(tmp_path / "nope.nc")]).run(StageContext("obs"))

@@ -34,6 +34,28 @@ def test_bundled_default_trains_on_bcf1_and_bcf2_and_holds_out_bcf3():
     assert _names(p.nodes["validation"].params["experiments"]) == ["BCF1", "BCF2", "BCF3"]
 
 
+def test_the_chapter_3_and_4_pipelines_calibrate_the_studys_space_or_under_the_thesis_profile_its_tables():
+    """Study profile: one design column per label of [parameters.calibrated] (bundled: Table 3.2's ranges, n_high /
+    n_low setting all three phases' exponents); thesis profile: Tables 3.2 and 4.1 as typed here from the thesis."""
+    for module in (history_matching, bayesian_calibration):
+        space = module.pipeline(quick=True).nodes["space"].params
+        assert space["names"] == ["ALPHAV2", "HBNC70", "HBNC71", "AD31", "GAMHF", "CRK", "n_high", "n_low", "ALPHAL1"]
+        assert space["ranges"]["n_high"] == {"names": ["E1C", "E2C", "E3C"], "range": [1.5, 3.0], "scale": "linear"}
+    w = workflow.pipeline(quick=True)
+    assert w.nodes["hm.space"].params == w.nodes["bc.space"].params == history_matching.pipeline().nodes["space"].params
+    table_3_2 = {"ALPHAV2": [0.0, 3.0], "HBNC70": [0.02, 0.05], "HBNC71": [0.01, 0.02], "AD31": [0.0, 2.0],
+                 "GAMHF": [55.0, 100.0], "CRK": [0.05, 0.1], "E2C": [1.5, 3.0], "E2WC": [1.5, 3.0],
+                 "ALPHAL1": [0.008, 0.012]}
+    table_4_1 = {"ALPHAV2": [2.5, 3.0], "HBNC70": [0.02, 0.035], "HBNC71": [0.01, 0.02], "AD31": [0.1, 1.0],
+                 "GAMHF": [50.0, 70.0], "CRK": [0.06, 0.08], "E2C": [1.5, 2.5], "E2WC": [1.5, 2.5],
+                 "ALPHAL1": [0.008, 0.012]}
+    for module, table in ((history_matching, table_3_2), (bayesian_calibration, table_4_1)):
+        space = module.pipeline(quick=True, profile="thesis").nodes["space"].params
+        assert space["names"] == list(table) and space["ranges"] == table
+    t = workflow.pipeline(quick=True, profile="thesis")
+    assert t.nodes["hm.space"].params["ranges"] == table_3_2 and t.nodes["bc.space"].params["ranges"] == table_4_1
+
+
 def test_thesis_profile_trains_on_bcf1_alone():
     for module in (history_matching, bayesian_calibration):
         p = module.pipeline(quick=True, profile="thesis")

@@ -15,6 +15,7 @@ import xarray as xr
 from spflow.core.stage import StageContext
 from spflow.plugins.calibration.aligned_data import align
 from spflow.plugins.calibration.nsga2_misfits import relative_l2_misfit
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.surrogates.outputs import stack_outputs
@@ -28,15 +29,17 @@ class HeldOutCheck:
     ``forward`` is a configured :class:`Forward` stage (its ``experiments`` are the held-out corefloods, its
     ``fixed``/``effects``/``cells``/``pv_step`` the model the surrogate was trained on); ``observations`` has dims
     (experiment, pv) on the same PV grid spacing. Construction checks that every (variable, experiment) pair has
-    observations, so a misnamed experiment fails before the optimisation starts.
+    observations, so a misnamed experiment fails before the optimisation starts. ``columns``: the parameter map of
+    the points' columns (a list of UTCHEM names: each column sets its own parameter).
     """
 
-    def __init__(self, forward: Forward, observations: xr.Dataset, variables: list[str], names: list[str]):
+    def __init__(self, forward: Forward, observations: xr.Dataset, variables: list[str],
+                 columns: ParameterMap | list[str]):
         self.forward = forward
         self.observations = observations
         self.variables = [str(v) for v in variables]
         self.experiments = [e.name for e in forward_experiments(forward.params["experiments"], forward.params["fixed"])]
-        self.names = [str(n) for n in names]
+        self.columns = columns if isinstance(columns, ParameterMap) else ParameterMap.identity(columns)
         self.pairs = [(v, e) for e in self.experiments for v in self.variables]
         # the observations themselves as a one-sample "prediction": align() then validates every pair up front
         _, index = stack_outputs(observations.expand_dims(sample=1), self.variables, self.experiments)
@@ -44,8 +47,7 @@ class HeldOutCheck:
 
     def misfits(self, ctx: StageContext, points: np.ndarray) -> np.ndarray:
         """Relative L2 misfits of ``points`` (n, n_param), shape (n, n_experiment, n_variable)."""
-        design = xr.Dataset({"values": (("sample", "param"), np.atleast_2d(points))},
-                            coords={"sample": np.arange(len(points)), "param": self.names})
+        design = self.columns.design(points)
         responses = self.forward.run(ctx, design=design)
         prediction, index = stack_outputs(responses, self.variables, self.experiments)
         aligned = align(index, self.observations, self.pairs)

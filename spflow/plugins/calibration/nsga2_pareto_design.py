@@ -4,7 +4,8 @@ Figs. 3.11-3.13 run the simulator at every point of the Pareto front after the f
 draw the responses over the data. This stage turns fronts stored by ``nsga2_calibration`` (its ``snapshot``
 generations, which always include the last one) into a ``design`` Dataset (dims sample, param) with a
 ``generation`` coordinate on ``sample`` telling which front each point belongs to, so one ordinary ``forward`` node
-simulates them all — cached, and parallel over every point at once.
+simulates them all — cached, and parallel over every point at once. The design carries the calibration's parameter
+map (which UTCHEM names each column sets).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.calibration.nsga2_stage import NSGA2_CALIBRATION
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import DESIGN
 
 __all__ = ["ParetoDesign"]
@@ -23,6 +25,7 @@ __all__ = ["ParetoDesign"]
 
 class ParetoDesign(Stage):
     name = "pareto_design"
+    version = "2"
     description = "the Pareto sets of an nsga2_calibration at stored generations, as one design"
     inputs = {"calibration": NSGA2_CALIBRATION}
     output = DESIGN
@@ -43,10 +46,7 @@ class ParetoDesign(Stage):
             snap = calibration.sel(snapshot=g)
             fronts.append(snap["front_designs"].values[: int(snap["front_size"])])
         values = np.concatenate(fronts)
-        return xr.Dataset(
-            {"values": (("sample", "param"), values, {"units": "per-parameter (see param_unit)"})},
-            coords={"sample": np.arange(len(values)), "param": calibration["param"].values,
-                    "param_unit": ("param", calibration["param_unit"].values),
-                    "generation": ("sample", np.repeat(wanted, [len(f) for f in fronts]))},
-            attrs={"design": f"Pareto sets of generations {wanted}"},
-        )
+        return ParameterMap.of(calibration).design(
+            values, attrs={"design": f"Pareto sets of generations {wanted}"},
+            param_unit=("param", calibration["param_unit"].values),
+            generation=("sample", np.repeat(wanted, [len(f) for f in fronts])))

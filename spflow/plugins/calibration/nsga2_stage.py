@@ -5,7 +5,8 @@ on held-out corefloods (thesis §3.6-3.7, Algorithm 3).
   drop), summed over the ``training`` corefloods (thesis: BCF1 alone; the bundled study: BCF1 + BCF2), P = the
   surrogate's mean, evaluated for a whole generation at once
   (:class:`~spflow.plugins.calibration.nsga2_problem.SurrogateMisfitProblem`).
-* Search space: the ``space`` box (Table 3.2 ranges), which must lie inside the surrogate's training box.
+* Search space: the ``space`` box (a study's calibrated parameters, or Table 3.2), which must lie inside the
+  surrogate's training box.
 * Optimiser: pymoo NSGA-II with the thesis's settings (population 120, tournament of 4, crossover probability 0.8,
   mutation probability 0.01; mapping in :mod:`~spflow.plugins.calibration.nsga2_algorithm`), seeded.
 * Algorithm 3: every ``n_cross`` generations and at the last one the current Pareto set is simulated on the
@@ -28,7 +29,9 @@ minimum χ², the number of data, the archive size and whether the noise model c
 noise-consistent range covers at least ``undetermined_fraction`` of its prior width is one the training data leave
 undetermined: attrs ``undetermined`` (their names) and ``undetermined_warning`` say so, since held-out predictions
 that depend on it are not constrained by the calibration. Units are in each
-variable's attrs; ``param_unit`` and ``objective_unit`` coordinates give the per-parameter and per-objective units.
+variable's attrs; ``param_unit`` and ``objective_unit`` coordinates give the per-parameter and per-objective units;
+the space's parameter map (``utchem_names``, ``scale``: which UTCHEM names each column sets, and whether it holds
+log10 of the value, :mod:`spflow.plugins.design.parameter_map`) is carried along.
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ from spflow.plugins.calibration.nsga2_confidence import ConfidenceRegion, NoiseM
 from spflow.plugins.calibration.nsga2_heldout import HeldOutCheck
 from spflow.plugins.calibration.nsga2_history import HV_REFERENCE, CalibrationHistory
 from spflow.plugins.calibration.nsga2_problem import SurrogateMisfitProblem
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward import effects as forward_effects
 from spflow.plugins.forward.numba_cache import source_digest
@@ -103,7 +107,7 @@ def _squared_unit(unit: str) -> str:
 
 class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
-    version = "3"
+    version = "4"
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
     inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
@@ -176,12 +180,13 @@ class NSGA2Calibration(Stage):
         p = self.params
         model = load_surrogate(surrogate)
         names = [str(n) for n in space["param"].values]
+        mapping = ParameterMap.of(space)
         lower, upper = space["lower"].values.astype(float), space["upper"].values.astype(float)
         for bound in (lower, upper):  # the forward model accepts every point of the box (checked before any work)
-            resolve_params(dict(p["fixed"], **dict(zip(names, map(float, bound)))))
+            resolve_params(dict(p["fixed"], **mapping.forward_params(bound)))
         problem = SurrogateMisfitProblem(model, observations, names, lower, upper, p["variables"], p["training"])
         noise = NoiseMisfit(observations, problem.aligned, problem.pairs)
-        heldout = HeldOutCheck(self.forward, observations, p["variables"], names)
+        heldout = HeldOutCheck(self.forward, observations, p["variables"], mapping)
         history = CalibrationHistory(p["generations"], p["n_cross"], p["sigma_tol"], p["snapshots"],
                                      lambda points: heldout.misfits(ctx, points))
         algorithm = thesis_nsga2(pop_size=p["population"], tournament=p["tournament"],
@@ -190,7 +195,7 @@ class NSGA2Calibration(Stage):
         minimize(problem, algorithm, ("n_gen", p["generations"]), seed=p["seed"], callback=history, verbose=False)
         region = noise.region(problem.mean, lower, upper, history.archive, p["confidence_level"])
         units = [_squared_unit(model.outputs.units.get(v, "1")) for v in p["variables"]]
-        ds = self._dataset(history, names, space, units)
+        ds = mapping.attach(self._dataset(history, names, space, units))
         return self._add_undetermined(self._add_confidence(ds, region, noise, len(history.archive)))
 
     def _add_undetermined(self, ds: xr.Dataset) -> xr.Dataset:

@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from spflow.core.schema import DatasetSchema, Variable
+from spflow.plugins.design.parameter_map import ParameterMap
 
 __all__ = ["POSTERIOR", "posterior_dataset", "flat_theta", "block_labels"]
 
@@ -45,7 +46,9 @@ def posterior_dataset(theta: np.ndarray, sigma: np.ndarray, log_likelihood: np.n
                       acceptance: np.ndarray, *, space: xr.Dataset, pairs: list[tuple[str, str]],
                       points: list[int], units: list[str], attrs: dict,
                       chain_coords: dict | None = None) -> xr.Dataset:
-    """Assemble the posterior Dataset from arrays (chain, draw, ...) of one sampler run."""
+    """Assemble the posterior Dataset from arrays (chain, draw, ...) of one sampler run; it carries the space's
+    parameter map (:mod:`spflow.plugins.design.parameter_map`), so draws become forward-model parameters downstream
+    (``posterior_predictive``, ``slug_design``)."""
     names = [str(n) for n in space["param"].values]
     ds = xr.Dataset(
         {
@@ -66,7 +69,7 @@ def posterior_dataset(theta: np.ndarray, sigma: np.ndarray, log_likelihood: np.n
                 "block": block_labels(pairs), **(chain_coords or {})},
         attrs=dict(attrs),
     )
-    return ds
+    return ParameterMap.of(space).attach(ds)
 
 
 def flat_theta(posterior: xr.Dataset) -> np.ndarray:

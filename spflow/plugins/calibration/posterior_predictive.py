@@ -23,6 +23,7 @@ from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.failures import drop_failed
 from spflow.plugins.forward.stage import Forward
@@ -102,8 +103,7 @@ class PosteriorPredictive(Stage):
                                  f"{theta.shape[0]} posterior draws")
         rng = np.random.default_rng(self.params["seed"])
         rows = np.sort(rng.choice(theta.shape[0], self.params["draws"], replace=False))
-        design = xr.Dataset({"values": (("sample", "param"), theta[rows], {"units": "per-parameter (see space unit)"})},
-                            coords={"sample": np.arange(rows.size), "param": names})
+        design = ParameterMap.of(space.sel(param=names)).design(theta[rows])
         ensemble, kept = drop_failed(self._forward.run(ctx, design=design), "stage 'posterior_predictive'")
         rows, ensemble = rows[kept], ensemble.drop_vars("failure", errors="ignore")
         noisy = []

@@ -1,4 +1,5 @@
-"""The ``lhs_design`` stage: a Latin hypercube design (scipy.stats.qmc) scaled to a parameter space's bounds."""
+"""The ``lhs_design`` stage: a Latin hypercube design (scipy.stats.qmc) scaled to a parameter space's bounds; the
+design carries the space's parameter map (:mod:`.parameter_map`: which UTCHEM names each column sets, its scale)."""
 
 from __future__ import annotations
 
@@ -7,11 +8,13 @@ from scipy.stats import qmc
 
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import DESIGN, SPACE
 
 
 class LatinHypercubeDesign(Stage):
     name = "lhs_design"
+    version = "2"
     description = "Latin hypercube sample of a parameter space"
     inputs = {"space": SPACE}
     output = DESIGN
@@ -26,8 +29,4 @@ class LatinHypercubeDesign(Stage):
         sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"], optimization=opt)
         unit = sampler.random(self.params["samples"])
         values = qmc.scale(unit, space["lower"].values, space["upper"].values)
-        return xr.Dataset(
-            {"values": (("sample", "param"), values, {"units": "per-parameter (see space unit)"})},
-            coords={"sample": range(self.params["samples"]), "param": space["param"].values},
-            attrs={"design": "latin hypercube", "seed": self.params["seed"]},
-        )
+        return ParameterMap.of(space).design(values, attrs={"design": "latin hypercube", "seed": self.params["seed"]})

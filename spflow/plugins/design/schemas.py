@@ -1,8 +1,19 @@
 """Dataset contracts of parameter spaces and designs (shared by every stage that produces or consumes them)."""
 
 from spflow.core.schema import DatasetSchema, Variable
+from spflow.plugins.design.parameter_map import NAMES_VAR, SCALE_VAR
 
-#: A box of uncertain forward-model parameters (dim ``param``; coordinate = UTCHEM parameter names).
+#: The parameter map of a space or design (:mod:`spflow.plugins.design.parameter_map`): optional, absent = each
+#: column is the UTCHEM name it sets, on a linear scale.
+MAP_VARIABLES = {
+    NAMES_VAR: Variable(("param",), kind="UO", required=False,
+                             doc="forward-model (UTCHEM) parameters each column sets, separated by spaces"),
+    SCALE_VAR: Variable(("param",), kind="UO", required=False,
+                      doc="linear: the column is the value; log: the column is log10 of the value"),
+}
+
+#: A box of uncertain forward-model parameters (dim ``param``; coordinate = column labels: UTCHEM names or labels of
+#: groups, with the parameter map).
 SPACE = DatasetSchema(
     dims=("param",),
     variables={
@@ -10,13 +21,13 @@ SPACE = DatasetSchema(
         "upper": Variable(("param",), units=None),
         "default": Variable(("param",), units=None),
         "unit": Variable(("param",), kind="U"),
-    },
+    } | MAP_VARIABLES,
     doc="uncertain parameters with uniform bounds",
 )
 
 #: Sample points in a parameter space (dims ``sample``, ``param``).
 DESIGN = DatasetSchema(
     dims=("sample", "param"),
-    variables={"values": Variable(("sample", "param"), units=None)},
+    variables={"values": Variable(("sample", "param"), units=None)} | MAP_VARIABLES,
     doc="design points",
 )

@@ -5,7 +5,9 @@ Experiments of different total PV share one grid (the union of their own grids, 
 where a point is not theirs (past their end, or another experiment's off-step end point). An experiment is a
 bundled name or a mapping ``{"name", "schedule", "params"}`` (:mod:`spflow.plugins.forward.experiments`) whose
 ``params`` override ``fixed`` for that experiment (its own core, rate, fluids); the sample's values override both.
-Samples
+A design row becomes forward-model parameters through the design's parameter map
+(:class:`~spflow.plugins.design.parameter_map.ParameterMap`: a column may set several UTCHEM names, or hold log10 of
+the value). Samples
 run in parallel with the node's joblib budget; the simulator is deterministic, so serial and parallel runs are
 bit-identical. Every sample's parameters are validated before any simulation starts.
 
@@ -25,6 +27,7 @@ import xarray as xr
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import DESIGN
 from spflow.plugins.forward.budgets import DEFAULT_MAX_WALL_S
 from spflow.plugins.forward.errors import SimulationError
@@ -100,8 +103,8 @@ class Forward(Stage):
     def _rows(self, design: xr.Dataset | None) -> list[dict[str, float]]:
         if design is None:
             return [{}]
-        names = [str(n) for n in design["param"].values]
-        return [dict(zip(names, map(float, values))) for values in design["values"].values]
+        mapping = ParameterMap.of(design)
+        return [mapping.forward_params(values) for values in design["values"].values]
 
     def run(self, ctx: StageContext, design: xr.Dataset | None = None) -> xr.Dataset:
         fixed, effects = dict(self.params["fixed"]), dict(self.params["effects"])

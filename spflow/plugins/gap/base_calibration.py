@@ -19,6 +19,7 @@ import xarray as xr
 from scipy.stats import qmc
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.design.parameter_map import ParameterMap
 
 from .layout import Layout
 from .least_squares import Fit, WhitenedProblem, fit
@@ -28,19 +29,23 @@ __all__ = ["calibrate_base", "parameter_set_starts"]
 
 
 def parameter_set_starts(base, sets: xr.Dataset, max_members: int = 32) -> np.ndarray:
-    """Unit-box points (m, p) of the members of ``sets`` (dims sample, param; variable ``values``)."""
+    """Unit-box points (m, p) of the members of ``sets`` (dims sample, param; variable ``values``): each member's
+    forward-model values through the parameter map the sets carry (a design, an NSGA-II Pareto set or posterior draws
+    of grouped or log-scale columns, :mod:`spflow.plugins.design.parameter_map`); a column named by a base-model label
+    without a map is that parameter's value."""
     if "values" not in sets or tuple(sets["values"].dims) != ("sample", "param"):
         raise ParameterError("calibrated parameter sets need a variable 'values' on dims ('sample', 'param')")
     labels = [str(x) for x in sets["param"].values]
-    cols = []
-    for p in base.parameters:
-        key = p.label if p.label in labels else p.names[0] if p.names[0] in labels else None
-        if key is None:
-            raise ParameterError(f"calibrated parameter sets lack parameter {p.label!r} (have {labels})")
-        cols.append(labels.index(key))
-    values = np.asarray(sets["values"].values, dtype=float)[:, cols]
-    if not np.all(np.isfinite(values)):
+    rows = np.asarray(sets["values"].values, dtype=float)
+    if not np.all(np.isfinite(rows)):
         raise ParameterError("calibrated parameter sets contain NaN or inf values")
+    mapping = ParameterMap.of(sets)
+    physical = [dict(zip(labels, map(float, row))) | mapping.forward_params(row) for row in rows]
+    missing = [p.label for p in base.parameters if p.names[0] not in physical[0] and p.label not in physical[0]]
+    if missing:
+        raise ParameterError(f"calibrated parameter sets lack parameter {missing[0]!r} (have {labels})")
+    values = np.array([[row[p.names[0]] if p.names[0] in row else row[p.label] for p in base.parameters]
+                       for row in physical])
     step = max(1, int(np.ceil(values.shape[0] / max_members)))
     return base.unit(values[::step])
 

@@ -32,14 +32,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.design.calibrated_parameter import CalibratedParameter, calibrated_parameter
 from spflow.plugins.design.thesis_tables import TABLE_3_2
 from spflow.plugins.forward.effects import default_registry
-from spflow.plugins.forward.parameters import PARAMETERS, resolve_params
+from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.schedule import as_schedule
 
 __all__ = ["CalibratedParameter", "BaseModel", "TABLE_3_2_BASE", "unit_to_value", "value_to_unit"]
 
-_SPECS = {p.name: p for p in PARAMETERS}
 _KEYS = ("cells", "scheme", "pv_step", "effects", "fixed", "parameters", "schedules")
 _SCHEMES = ("tvd", "upwind")
 #: default output PV step of the forward runs (fine against the 0.02 PV transducer, 0.05 PV tubes)
@@ -73,54 +73,10 @@ def value_to_unit(x, lower, upper, log):
                         (x - lower) / (upper - lower))
 
 
-@dataclass(frozen=True)
-class CalibratedParameter:
-    """One calibrated number: a label, the UTCHEM names it sets, its range, its scale and unit."""
-
-    label: str
-    names: tuple[str, ...]
-    lower: float
-    upper: float
-    log: bool = False
-    unit: str = ""
-
-
 def _number(where: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ParameterError(f"{where} must be a finite number, got {value!r}")
     return float(value)
-
-
-def _parameter(label: str, spec) -> CalibratedParameter:
-    where = f"base model [parameters] {label!r}"
-    if isinstance(spec, Mapping):
-        unknown = sorted(set(spec) - {"names", "range", "scale"})
-        if unknown:
-            raise ParameterError(f"{where}: unknown field(s) {unknown}; allowed ['names', 'range', 'scale']")
-        names, rng, scale = spec.get("names", [label]), spec.get("range"), spec.get("scale", "linear")
-    else:
-        names, rng, scale = [label], spec, "linear"
-    if isinstance(names, str) or not isinstance(names, (list, tuple)) or not names:
-        raise ParameterError(f"{where}: 'names' must be a non-empty list of UTCHEM parameter names, got {names!r}")
-    for name in names:
-        if name not in _SPECS:
-            raise ParameterError(f"{where}: unknown forward-model parameter {name!r} (see `spflow list params`)")
-    if not isinstance(rng, (list, tuple)) or len(rng) != 2:
-        raise ParameterError(f"{where}: 'range' must be [lower, upper], got {rng!r}")
-    lo, hi = _number(f"{where} range lower", rng[0]), _number(f"{where} range upper", rng[1])
-    if not lo < hi:
-        raise ParameterError(f"{where}: range [{lo:g}, {hi:g}] must have lower < upper")
-    for name in names:
-        s = _SPECS[name]
-        if lo < s.lower or hi > s.upper:
-            raise ParameterError(f"{where}: range [{lo:g}, {hi:g}] leaves the bounds of {name} "
-                                 f"{s.describe_range()}")
-    if scale not in ("linear", "log"):
-        raise ParameterError(f"{where}: 'scale' must be 'linear' or 'log', got {scale!r}")
-    if scale == "log" and lo <= 0.0:
-        raise ParameterError(f"{where}: a log scale needs lower > 0, got range [{lo:g}, {hi:g}]")
-    units = {_SPECS[n].unit for n in names}
-    return CalibratedParameter(label, tuple(names), lo, hi, scale == "log", units.pop() if len(units) == 1 else "")
 
 
 @dataclass(frozen=True)
@@ -157,7 +113,8 @@ class BaseModel:
         if not isinstance(spec, Mapping) or not spec:
             raise ParameterError("base model [parameters] must list at least one calibrated parameter "
                                  "(label = [lower, upper])")
-        parameters = tuple(_parameter(str(label), s) for label, s in spec.items())
+        parameters = tuple(calibrated_parameter(str(label), s, f"base model [parameters] {str(label)!r}")
+                           for label, s in spec.items())
         taken = [n for p in parameters for n in p.names]
         dup = sorted({n for n in taken if taken.count(n) > 1})
         if dup:
@@ -204,7 +161,7 @@ class BaseModel:
 
     def default_unit(self) -> np.ndarray:
         """The forward model's defaults (the thesis's calibrated set) as a unit-box point, clipped into the box."""
-        return self.unit([_SPECS[p.names[0]].default for p in self.parameters])
+        return self.unit([p.default for p in self.parameters])
 
     def forward_params(self, values) -> dict[str, float]:
         """UTCHEM parameter dict of the fixed values plus the calibrated ``values`` (physical units)."""

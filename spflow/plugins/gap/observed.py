@@ -6,7 +6,9 @@ Each coreflood (a bundled name, a netCDF or CSV file, or an in-memory Dataset in
 documented lab defaults when the file has none, which the report says), and every measured variable on the
 simulator's output grid (:func:`spflow.plugins.observations.on_simulator_grid`: point values interpolated, tube
 averages volume-averaged, NaN where not measured). :func:`observed_experiment` rebuilds the same
-:class:`Experiment` from an ``observations`` stage output, which carries each coreflood's attrs.
+:class:`Experiment` from an ``observations`` stage output, which carries each coreflood's attrs; when that stage
+moved the effluent series back by the outlet dead volume (its ``dead_volume_pv``), the series are those of the core
+outlet and the Experiment's measurement model has no dead volume left.
 """
 
 from __future__ import annotations
@@ -120,7 +122,9 @@ def load_experiments(sources: Sequence, pv_step: float, schedules: Mapping[str, 
 def observed_experiment(observations: xr.Dataset, name: str) -> Experiment:
     """Experiment ``name`` of an ``observations`` stage output: its series on the experiment's own simulator grid
     and the schedule, core data and measurement model from the coreflood attrs the stage carries
-    (``coreflood_attrs``). Equal to what :func:`load_experiments` makes of the same file at the same ``pv_step``."""
+    (``coreflood_attrs``). Equal to what :func:`load_experiments` makes of the same file at the same ``pv_step`` --
+    of the file with its dead volume taken out (:func:`spflow.plugins.observations.at_core_outlet`, measurement model
+    without dead volume) when the stage corrected for it (module docstring)."""
     names = [str(e) for e in observations["experiment"].values]
     if name not in names:
         raise ParameterError(f"experiment {name!r} is not in the observations; they have {names}")
@@ -138,4 +142,7 @@ def observed_experiment(observations: xr.Dataset, name: str) -> Experiment:
             series = observations[v].values[i, positions[i]]
             if np.isfinite(series).any():
                 observed[v] = series
-    return _from_attrs(name, as_schedule(json.loads(attrs["schedule"])), attrs, own, step, observed)
+    exp = _from_attrs(name, as_schedule(json.loads(attrs["schedule"])), attrs, own, step, observed)
+    if "dead_volume_pv" in observations and float(observations["dead_volume_pv"].values[i]) > 0.0:
+        exp = replace(exp, measurement=replace(exp.measurement, dead_volume_ml=0.0))  # already taken out
+    return exp

@@ -25,6 +25,7 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.effects import default_registry
 from spflow.plugins.forward.failures import reject_failed
@@ -106,9 +107,9 @@ class ScreeningStage(Stage):
         return {}
 
     # -- the shared procedure --------------------------------------------------------------------------------------
-    def _checked_groups(self, names: list[str]) -> dict[str, list[str]]:
+    def _checked_groups(self, names: list[str], mapping: ParameterMap) -> dict[str, list[str]]:
         groups = resolve_groups(self.name, names, self.params["groups"])
-        overlap = sorted(set(self.params["fixed"]) & set(names))
+        overlap = sorted(set(self.params["fixed"]) & {n for column in mapping.names for n in column})
         if overlap:
             raise ParameterError(f"stage {self.name!r} parameter 'fixed' sets {overlap}, which the space varies; "
                                  "remove them from 'fixed' or from the space")
@@ -116,17 +117,14 @@ class ScreeningStage(Stage):
 
     def run(self, ctx: StageContext, space: xr.Dataset) -> xr.Dataset:
         names = [str(n) for n in space["param"].values]
-        groups = self._checked_groups(names)
+        mapping = ParameterMap.of(space)
+        groups = self._checked_groups(names, mapping)
         lower, upper, default = (space[k].values.astype(float) for k in ("lower", "upper", "default"))
         blocks = blocks_for(names, groups, self.params["mode"], self._runs)
         streams = [s.spawn(2) for s in np.random.SeedSequence(self.params["seed"]).spawn(len(blocks))]
         samples = [self._sample(b.names, lower[b.columns], upper[b.columns], np.random.default_rng(s[0]))
                    for b, s in zip(blocks, streams)]
-        design = xr.Dataset(
-            {"values": (("sample", "param"), full_design(default, blocks, samples),
-                        {"units": "per-parameter (see space unit)"})},
-            coords={"param": names},
-        )
+        design = mapping.design(full_design(default, blocks, samples))
         responses = self._forward.run(ctx, design=design)
         reject_failed(responses, f"stage {self.name!r}")
         y, index = qoi_matrix(responses, list(self.params["qois"]))
@@ -146,6 +144,7 @@ class ScreeningStage(Stage):
         out = out.assign_coords(group=("param", np.array([group_of[n] for n in names])))
         for k in ("lower", "upper", "default", "unit"):
             out[k] = space[k]
+        out = mapping.attach(out)
         out["selected"] = ("param", self.rule.apply(out["score"].values, out["group"].values),
                            {"rule": self.rule.describe()})
         out.attrs = {

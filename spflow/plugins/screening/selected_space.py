@@ -1,5 +1,6 @@
 """The ``selected_space`` stage: the reduced parameter space a screening kept (Algorithm 1, step 10: "combine all
-xi_Mi"), as a SPACE Dataset that ``lhs_design`` and the surrogate stages consume."""
+xi_Mi"), as a SPACE Dataset that ``lhs_design`` and the surrogate stages consume, with the screened space's parameter
+map (which UTCHEM names each column sets)."""
 
 from __future__ import annotations
 
@@ -7,14 +8,14 @@ import xarray as xr
 
 from spflow.core.errors import ParameterError
 from spflow.core.stage import Stage, StageContext
-from spflow.plugins.design.schemas import SPACE
+from spflow.plugins.design.schemas import MAP_VARIABLES, SPACE
 
 from .schemas import SCREENING
 
 
 class SelectedSpace(Stage):
     name = "selected_space"
-    version = "1"
+    version = "2"
     description = "the parameters a screening selected, as a parameter space"
     inputs = {"screening": SCREENING}
     output = SPACE
@@ -25,7 +26,8 @@ class SelectedSpace(Stage):
             raise ParameterError(f"stage 'selected_space': the screening selected no parameter "
                                  f"(rule: {screening.attrs.get('selection_rule', '?')}); lower its threshold or "
                                  "set top_k")
-        out = screening[["lower", "upper", "default", "unit"]].isel(param=keep)
+        kept = ["lower", "upper", "default", "unit"] + [k for k in MAP_VARIABLES if k in screening]
+        out = screening[kept].isel(param=keep)
         out = out.drop_vars([c for c in out.coords if "qoi" in out[c].dims])
         out.attrs = {"distribution": "independent uniform",
                      "screening": f"{screening.attrs['method']} ({screening.attrs.get('selection_rule', '')})"}

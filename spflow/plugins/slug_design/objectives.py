@@ -23,6 +23,7 @@ import xarray as xr
 from joblib import delayed
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.schedule import Schedule
 from spflow.plugins.forward.simulate import simulate
@@ -81,12 +82,16 @@ class SlugDesignProblem:
 
 
 class Realisations:
-    """Draws of ξ = (θ, S): ``theta`` (n, p) posterior draws of the parameters ``names`` (``None``: no parameter
-    uncertainty) and price paths of ``problem.price``."""
+    """Draws of ξ = (θ, S): ``theta`` (n, p) posterior draws of the columns ``columns`` (``None``: no parameter
+    uncertainty) and price paths of ``problem.price``. ``columns``: the posterior's parameter map
+    (:class:`~spflow.plugins.design.parameter_map.ParameterMap`, which UTCHEM names each column sets), or a list of
+    UTCHEM names (each column sets its own parameter)."""
 
-    def __init__(self, problem: SlugDesignProblem, theta: np.ndarray | None = None, names: Sequence[str] = ()):
+    def __init__(self, problem: SlugDesignProblem, theta: np.ndarray | None = None,
+                 columns: ParameterMap | Sequence[str] = ()):
         self.problem = problem
-        self.names = tuple(str(n) for n in names)
+        self.columns = columns if isinstance(columns, ParameterMap) else ParameterMap.identity(columns)
+        self.names = self.columns.labels
         if theta is not None:
             theta = np.asarray(theta, dtype=float)
             if theta.ndim != 2 or theta.shape[0] < 1 or theta.shape[1] != len(self.names):
@@ -101,8 +106,8 @@ class Realisations:
         self.theta = theta
 
     def parameters(self, row: np.ndarray) -> dict[str, float]:
-        """Parameter name -> value of one posterior draw."""
-        return dict(zip(self.names, map(float, row)))
+        """UTCHEM name -> value of one posterior draw (through the parameter map)."""
+        return self.columns.forward_params(row)
 
     def draw(self, seed: np.random.SeedSequence) -> tuple[int, dict[str, float], np.ndarray]:
         """One ξ: posterior draw index (-1 without a posterior), its parameters and the annual prices S(t_j) (N_t,)."""

@@ -25,6 +25,7 @@ from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.calibration.posterior import POSTERIOR, flat_theta
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.forward.effects import default_registry
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.stage import Forward
@@ -129,7 +130,7 @@ class SlugDesign(Stage):
                                     effects=dict(p["effects"]))
         if posterior is None:
             return Realisations(problem)
-        return Realisations(problem, flat_theta(posterior), [str(n) for n in posterior["param"].values])
+        return Realisations(problem, flat_theta(posterior), ParameterMap.of(posterior))
 
     def __init__(self, **params):
         super().__init__(**params)

@@ -22,6 +22,7 @@ from scipy.stats import qmc
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
@@ -72,8 +73,7 @@ class AdaptivePCE(Stage):
     def _batch(self, space: xr.Dataset, size: int, iteration: int) -> xr.Dataset:
         sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"] + iteration)
         values = qmc.scale(sampler.random(size), space["lower"].values, space["upper"].values)
-        return xr.Dataset({"values": (("sample", "param"), values, {"units": "per-parameter"})},
-                          coords={"sample": np.arange(size), "param": space["param"].values})
+        return ParameterMap.of(space).design(values)
 
     def run(self, ctx: StageContext, space: xr.Dataset) -> xr.Dataset:
         p = self.params
@@ -83,8 +83,9 @@ class AdaptivePCE(Stage):
             batch = self._batch(space, size, iteration)
             designs.append(batch)
             responses.append(self._forward.run(ctx, design=batch))
-            design = xr.concat(designs, dim="sample").assign_coords(sample=np.arange(sum(d.sizes["sample"]
-                                                                                         for d in designs)))
+            size_so_far = sum(d.sizes["sample"] for d in designs)
+            design = xr.concat(designs, dim="sample", data_vars="minimal").assign_coords(
+                sample=np.arange(size_so_far))
             response = xr.concat(responses, dim="sample", data_vars="minimal", coords="minimal",
                                  compat="override").assign_coords(sample=design["sample"].values)
             data = training_set(space, design, response, list(p["variables"]), self._names)
