@@ -12,6 +12,7 @@ from pymoo.core.problem import Problem
 from pymoo.optimize import minimize
 from scipy import stats
 from test_nsga_stage import CTX, TABLE_3_2, Z_A, _linear_problem, _small_run
+from test_nsga_stage import toy_kind_registered  # noqa: F401  (autouse fixture: registers the toy surrogate kind)
 
 from spflow.core.errors import ParameterError
 from spflow.io import load_coreflood
