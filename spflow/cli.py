@@ -32,14 +32,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from spflow.core.console import configure_console
 from spflow.core.errors import SpflowError
-from spflow.core.executor import BACKENDS, run, status
+from spflow.core.executor import run, status
 from spflow.core.hashing import canonical_hash
 from spflow.core.html_report import Section, provenance_rows, sections_from, write_html_report
 from spflow.core.overrides import apply_overrides
 from spflow.core.pipeline import Pipeline
 from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
 from spflow.core.plugins import get_registry
+from spflow.core.runners import BACKENDS
 from spflow.plugins.gap.command import add_parser as add_diagnose_parser
 from spflow.plugins.gap.command import main as diagnose_command
 from spflow.export.command import add_parser as add_export_parser, main as export_command
@@ -267,6 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    configure_console()
     handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
                "diagnose": diagnose_command, "export": export_command, "compare": export_command,
                "init": study_command, "check": study_command}[args.command]
