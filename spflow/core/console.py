@@ -1,7 +1,7 @@
 """What the ``spflow`` command shows on stderr: the ``spflow`` loggers' records, and the progress of running nodes.
 
-:func:`configure_console` installs one :class:`ConsoleHandler` on the ``spflow`` logger (replacing any it installed
-before). Ordinary records at INFO and above are written as ``[spflow] message``. Progress records (those carrying
+:func:`console_logging` installs a :class:`ConsoleHandler` on the ``spflow`` logger for the duration of a command
+(and takes it away after, with the logger's level). Ordinary records at INFO and above are written as ``[spflow] message``. Progress records (those carrying
 ``record.progress``, from the built-in progress plugin ``spflow/plugins/progress_report.py``): on a terminal, one
 status line redrawn in place holding a bar per running node (done/total, elapsed, ETA), cleared before any other line
 is written and when the node ends; elsewhere (a file, a pipe, CI) only the milestone records (INFO: about every
@@ -10,13 +10,15 @@ is written and when the node ends; elsewhere (a file, a pipe, CI) only the miles
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import shutil
 import sys
 import threading
+from collections.abc import Iterator
 from typing import Any, TextIO
 
-__all__ = ["ConsoleHandler", "configure_console"]
+__all__ = ["ConsoleHandler", "console_logging"]
 
 _BAR = 20  # characters of a bar
 
@@ -72,12 +74,17 @@ class ConsoleHandler(logging.Handler):
             self.handleError(record)
 
 
-def configure_console(stream: TextIO | None = None) -> ConsoleHandler:
-    """Show the ``spflow`` loggers on ``stream`` (default: the current ``sys.stderr``) as the command does."""
+@contextlib.contextmanager
+def console_logging(stream: TextIO | None = None) -> Iterator[ConsoleHandler]:
+    """Within the block, show the ``spflow`` loggers on ``stream`` (default: the current ``sys.stderr``) as the
+    command does; the logger's handlers and level are restored after."""
     logger = logging.getLogger("spflow")
-    for old in [h for h in logger.handlers if isinstance(h, ConsoleHandler)]:
-        logger.removeHandler(old)
     handler = ConsoleHandler(stream if stream is not None else sys.stderr)
+    level = logger.level
     logger.addHandler(handler)
     logger.setLevel(logging.DEBUG if handler.live else logging.INFO)
-    return handler
+    try:
+        yield handler
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)

@@ -217,12 +217,13 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
         for name in result.cached:
             _reused(notify, name, plan.stages[name])
         ops = _NodeOps(plan, store, manifest, result, forced, notify, runner, verbose)
-        with runner.started(jobs, ops.progress(notify)) as workers:
-            ops.workers = workers
-            graph = _run_graph(plan.graph, to_run, twins)
-            priority = [n for generation in nx.topological_generations(graph) for n in sorted(generation)]
-            drive(graph, priority, jobs, runner.node_slots(jobs),
-                  NodeOps(ops.try_lock, ops.lock, ops.unlock, ops.needed, ops.launch, ops.land))
+        if to_run:  # a fully cached run starts no workers (no process pool, no connection to a Dask scheduler)
+            with runner.started(jobs, ops.progress(notify)) as workers:
+                ops.workers = workers
+                graph = _run_graph(plan.graph, to_run, twins)
+                priority = [n for generation in nx.topological_generations(graph) for n in sorted(generation)]
+                drive(graph, priority, jobs, runner.node_slots(jobs),
+                      NodeOps(ops.try_lock, ops.lock, ops.unlock, ops.needed, ops.launch, ops.land))
         computed_twins = [n for n in twins if twins[n] in result.executed]
         result.cached += computed_twins
         manifest.note({name: plan.prov[name] for name in computed_twins})

@@ -6,7 +6,8 @@ Each report of a node becomes a record of its logger ``spflow.stage.<node>`` car
 with ``finished=True``. An ordinary log handler at INFO thus shows about ten lines per node; the terminal display of
 the ``spflow`` command (:mod:`spflow.core.console`) redraws a live bar from every record.
 
-The ETA is linear: elapsed time x (total - done) / done, since the node started.
+The ETA is linear in the rate since the node's first report (so that starting a worker process or loading inputs
+does not count as work): (now - first report) / (done - done at the first report) x (total - done).
 """
 
 from __future__ import annotations
@@ -60,6 +61,8 @@ class Progress:
 @dataclass
 class _Node:
     started: float
+    first_time: float = -1.0
+    first_done: int = 0
     milestone_time: float = -1.0
     milestone_done: int = 0
     last: Progress | None = None
@@ -81,10 +84,12 @@ def spflow_node_progress(node, done, total, what):
     now = time.monotonic()
     with _LOCK:
         state = _NODES.setdefault(node, _Node(now))
-        elapsed = now - state.started
-        eta = elapsed * (total - done) / done if total and done else None
-        progress = Progress(node, done, total, what, elapsed, eta)
         first = state.milestone_time < 0
+        if first:
+            state.first_time, state.first_done = now, done
+        rate = (now - state.first_time) / (done - state.first_done) if done > state.first_done else None
+        eta = rate * (total - done) if rate is not None and total else None
+        progress = Progress(node, done, total, what, now - state.started, eta)
         milestone = (first or done == total or now - state.milestone_time >= MILESTONE_SECONDS
                      or bool(total) and (done - state.milestone_done) >= MILESTONE_FRACTION * total)
         if milestone:

@@ -10,7 +10,7 @@ import pytest
 from helpers import chain
 
 import spflow
-from spflow.core.console import configure_console
+from spflow.core.console import console_logging
 from spflow.plugins import progress_report
 
 
@@ -19,17 +19,7 @@ class Terminal(io.StringIO):
         return True
 
 
-@pytest.fixture
-def console_logger():
-    """Restore the ``spflow`` logger after a test installed the console on it."""
-    logger = logging.getLogger("spflow")
-    handlers, level = list(logger.handlers), logger.level
-    yield logger
-    logger.handlers[:] = handlers
-    logger.setLevel(level)
-
-
-def test_milestones_every_tenth_and_a_linear_eta(monkeypatch, caplog):
+def test_milestones_every_tenth_and_an_eta_at_the_rate_since_the_first_report(monkeypatch, caplog):
     clock = iter(range(0, 1000))  # each call to time.monotonic advances one second
     monkeypatch.setattr(progress_report.time, "monotonic", lambda: float(next(clock)))
     progress_report.spflow_node_start(node="n", stage=None, cached=False)  # t = 0
@@ -40,9 +30,9 @@ def test_milestones_every_tenth_and_a_linear_eta(monkeypatch, caplog):
     # first report, then every 4 steps (10 % of 40) -- or 5 s, which 4 steps of 1 s never reach
     assert [p.done for p in info] == list(range(0, 41, 4))
     assert len([r for r in caplog.records if r.levelno == logging.DEBUG]) == 41 - len(info)
-    tenth = info[1]  # done 4 at t = 5: 5 s elapsed, 36 steps left at 5/4 s each
-    assert tenth.elapsed == 5.0 and tenth.eta == pytest.approx(36 * 5 / 4)
-    assert tenth.describe() == "4/40 steps (10 %), 0:05 elapsed, ETA 0:45"
+    tenth = info[1]  # done 4 at t = 5: 5 s since the start; 4 steps in the 4 s since the first report, 36 left
+    assert tenth.elapsed == 5.0 and tenth.eta == pytest.approx(36 * 4 / 4)
+    assert tenth.describe() == "4/40 steps (10 %), 0:05 elapsed, ETA 0:36"
     assert info[-1].describe() == "40/40 steps (100 %), 0:41 elapsed"
 
 
@@ -56,12 +46,12 @@ def test_a_slow_stage_gets_a_line_every_five_seconds(monkeypatch, caplog):
     assert [r.progress.done for r in caplog.records] == [0, 2, 4]  # at 3 s, then at 9 and 15 s (>= 5 s apart)
 
 
-def test_plain_lines_off_a_terminal(toys, cache, console_logger):
+def test_plain_lines_off_a_terminal(toys, cache):
     stream = io.StringIO()
-    configure_console(stream)
     p = spflow.Pipeline("steps")
     p.add("count", "toy_steps", params={"n": 30})
-    spflow.run(p, cache=cache)
+    with console_logging(stream):
+        spflow.run(p, cache=cache)
     lines = stream.getvalue().splitlines()
     assert "\r" not in stream.getvalue()
     assert lines[0] == "[spflow] steps: 1 node(s) to run, 0 cached"
@@ -72,12 +62,13 @@ def test_plain_lines_off_a_terminal(toys, cache, console_logger):
     assert lines[-1].startswith("[spflow] (1/1) count: ran toy_steps in ")
 
 
-def test_a_live_line_on_a_terminal(toys, cache, console_logger):
+def test_a_live_line_on_a_terminal(toys, cache):
     stream = Terminal()
-    configure_console(stream)
     p = spflow.Pipeline("steps")
     p.add("count", "toy_steps", params={"n": 4})
-    spflow.run(p, cache=cache)
+    with console_logging(stream) as handler:
+        spflow.run(p, cache=cache)
+    assert handler.live and handler not in logging.getLogger("spflow").handlers  # taken away after the block
     text = stream.getvalue()
     bars = re.findall(r"\[count\] [#.]{20} [^\r\n]*", text)
     assert bars[0].startswith("[count] .................... 0/4 steps (0 %), 0:00 elapsed")
