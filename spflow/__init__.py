@@ -24,6 +24,7 @@ from spflow.core.hookspecs import hookimpl
 from spflow.core.params import Param
 from spflow.core.pipeline import Pipeline
 from spflow.core.plugins import get_registry, register_plugin, reset_registry, unregister_plugin
+from spflow.core.runners import DaskRunner, ProcessRunner, Runner, SequentialRunner, ThreadRunner
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.core.version import __version__
@@ -37,6 +38,7 @@ __all__ = [
     "CacheError",
     "CacheIntegrityWarning",
     "CacheWarning",
+    "DaskRunner",
     "DatasetSchema",
     "Effect",
     "NodeStatus",
@@ -46,14 +48,18 @@ __all__ = [
     "PipelineError",
     "PluginError",
     "PluginWarning",
+    "ProcessRunner",
     "RunResult",
+    "Runner",
     "SchemaError",
+    "SequentialRunner",
     "SpflowError",
     "Stage",
     "StageContext",
     "StageError",
     "Study",
     "StudyError",
+    "ThreadRunner",
     "Variable",
     "__version__",
     "bundled_study",

@@ -1,8 +1,8 @@
 """The ``spflow`` command: run, status, report, list, clean, diagnose.
 
     spflow run PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--until NODE]
-                        [--only NODE] [--force NODE] [--jobs N] [--backend loky|threads|dask] [--scheduler ADDRESS]
-                        [--cache DIR] [--out DIR]
+                        [--only NODE] [--force NODE] [--jobs N] [--backend loky|threads|sequential|dask]
+                        [--scheduler ADDRESS] [--cache DIR] [--out DIR]
     spflow status PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
     spflow report PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
                            [--out DIR]
@@ -32,14 +32,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from spflow.core.console import console_logging
 from spflow.core.errors import SpflowError
-from spflow.core.executor import BACKENDS, run, status
+from spflow.core.executor import run, status
 from spflow.core.hashing import canonical_hash
 from spflow.core.html_report import Section, provenance_rows, sections_from, write_html_report
 from spflow.core.overrides import apply_overrides
 from spflow.core.pipeline import Pipeline
 from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
 from spflow.core.plugins import get_registry
+from spflow.core.runners import BACKENDS
 from spflow.plugins.gap.command import add_parser as add_diagnose_parser
 from spflow.plugins.gap.command import main as diagnose_command
 from spflow.export.command import add_parser as add_export_parser, main as export_command
@@ -270,11 +272,12 @@ def main(argv: list[str] | None = None) -> int:
     handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
                "diagnose": diagnose_command, "export": export_command, "compare": export_command,
                "init": study_command, "check": study_command}[args.command]
-    try:
-        return handler(args)
-    except SpflowError as exc:
-        print(f"spflow: error: {exc}", file=sys.stderr)
-        return 2
+    with console_logging():
+        try:
+            return handler(args)
+        except SpflowError as exc:
+            print(f"spflow: error: {exc}", file=sys.stderr)
+            return 2
 
 
 if __name__ == "__main__":

@@ -1,15 +1,16 @@
-"""Run a pipeline: plan from provenance keys, reuse cached results, execute the rest level by level in parallel.
+"""Run a pipeline: plan from provenance keys, reuse cached results, execute the rest through a ready queue.
 
 * Keys are computed for every node before anything runs (see :mod:`spflow.core.provenance`).
 * A node whose key is in the store is not executed if the entry passes its checksum, records that key and stage, and
   matches the stage's output schema (dims, variables, dtypes, units: read without loading the arrays); any other
   entry is discarded with a :class:`~spflow.core.errors.CacheIntegrityWarning` and recomputed.
+* Nodes to execute start as soon as their inputs are stored, within the worker budget ``jobs``
+  (:mod:`spflow.core.ready_queue`); a node's own parallelism (``ctx.parallel()``) gets the workers that were free
+  when it started. Where a node runs -- this process, threads, loky processes, a Dask cluster -- is the runner's
+  business (:mod:`spflow.core.runners`); results and keys do not depend on it.
 * Runs sharing a cache coordinate through per-key locks: a node is computed under its key's lock, and a run that
   finds the lock taken computes its other ready nodes first, then waits and reuses what the other run stored. A run
   never waits for a lock while holding another, so two runs cannot deadlock.
-* Nodes to execute run by topological generation. A generation of several nodes runs them side by side with joblib
-  (each node then gets ``n_jobs=1`` for its own work); a lone node gets the whole worker budget for its inner
-  parallelism. One parallel layer per level.
 * Nodes with the same key (the same stage, params and upstream data, e.g. one node copied into two included
   sub-pipelines) are computed once per run; the others read the stored result.
 * Each finished node is validated and written to the store as soon as it completes, so an exception or
@@ -18,15 +19,17 @@
 * The per-pipeline manifest (behind ``status``'s explanations) is written only when it changes, and best-effort: a
   failure is a :class:`~spflow.core.errors.CacheWarning`. A fully cached run writes nothing, so it works on a
   read-only cache.
+* Every step calls the lifecycle hooks (``spflow_run_start``, ``spflow_node_start``, ``spflow_node_progress``,
+  ``spflow_node_end``, ``spflow_node_error``, ``spflow_run_end``: :mod:`spflow.core.hookspecs`); the executor
+  prints nothing itself -- its log and progress display are built-in plugins of those hooks.
 """
 
 from __future__ import annotations
 
-import contextlib
-import sys
 import time
 import warnings
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,12 +42,11 @@ from .errors import CacheError, CacheIntegrityWarning, CacheWarning, PipelineErr
 from .pipeline import Pipeline
 from .plugins import get_registry
 from .provenance import key_of, provenance, stale_reasons
+from .ready_queue import NodeOps, drive
+from .runners import Runner, Workers, runner_for
 from .stage import Stage, StageContext
 
-__all__ = ["run", "status", "RunResult", "NodeStatus", "BACKENDS"]
-
-#: CLI/backend names -> joblib backend names.
-BACKENDS = {"loky": "loky", "threads": "threading", "threading": "threading", "dask": "dask"}
+__all__ = ["run", "status", "RunResult", "NodeStatus"]
 
 
 @dataclass
@@ -146,27 +148,13 @@ def _selected(pipeline: Pipeline, until: Iterable[str] | str | None, only: Itera
 
 
 def _execute(stage: Stage, ctx: StageContext, inputs: dict[str, xr.Dataset]) -> tuple[xr.Dataset, float]:
-    """Run one stage (in whatever process joblib chose) and return its output and wall time."""
+    """Run one stage (wherever the runner put it) and return its output and wall time."""
     t0 = time.perf_counter()
     out = stage.run(ctx, **inputs)
     return out, time.perf_counter() - t0
 
 
-@contextlib.contextmanager
-def _backend_context(backend: str, scheduler: str | None) -> Iterator[None]:
-    if backend != "dask":
-        yield
-        return
-    if not scheduler:
-        raise PipelineError("backend 'dask' needs a scheduler address (e.g. --scheduler tcp://127.0.0.1:8786)")
-    from distributed import Client
-    from joblib import parallel_config
-
-    with Client(scheduler), parallel_config(backend="dask"):
-        yield
-
-
-def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, backend: str = "loky",
+def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, backend: str | Runner = "loky",
         scheduler: str | None = None, until: Iterable[str] | str | None = None,
         only: Iterable[str] | str | None = None, force: Iterable[str] | str = (), verbose: bool = False) -> RunResult:
     """Run ``pipeline`` and return its results (a mapping node -> Dataset).
@@ -174,17 +162,21 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
     Parameters
     ----------
     cache: directory of the result store.
-    jobs: worker budget (nodes side by side, or a lone node's inner parallelism).
-    backend: ``loky`` (processes, default), ``threads`` or ``dask`` (with ``scheduler`` = address).
+    jobs: worker budget (nodes side by side, and the inner parallelism of nodes started on free workers).
+    backend: a :class:`~spflow.core.runners.Runner`, or the name of one (:data:`~spflow.core.runners.BACKENDS`):
+        ``loky`` (processes, default), ``threads``, ``sequential`` or ``dask`` (with ``scheduler`` = address).
     until: run only these nodes and their ancestors.
     only: run only these nodes; their inputs must already be in the cache.
     force: recompute these nodes and everything downstream of them even if cached.
+    verbose: passed to the stages (``StageContext.verbose``: a stage may print its own findings). What the run
+        does is logged (``logging``, loggers ``spflow.executor`` and ``spflow.stage.<node>``), shown only if the
+        application configures logging, as the ``spflow`` command does.
     """
-    if backend not in BACKENDS:
-        raise PipelineError(f"backend must be one of {sorted(BACKENDS)}, got {backend!r}")
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise PipelineError(f"jobs must be an integer >= 1 (not a bool), got {jobs!r}")
+    runner = runner_for(backend, scheduler)
     plan = _plan(pipeline)
+    notify = get_registry().notify
     store = Store(cache)
     selected = _selected(pipeline, until, only)
     forced = pipeline.downstream_of([force] if isinstance(force, str) else force) & selected
@@ -219,82 +211,135 @@ def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, bac
                         f"--only {name!r}: its input {port!r} (node {up!r}) is not in the cache; run without only first"
                     )
 
-    memory: dict[str, xr.Dataset] = {}
+    notify("spflow_run_start", pipeline=pipeline, to_run=list(to_run), cached=list(result.cached), runner=runner)
+    error: BaseException | None = None
+    try:
+        for name in result.cached:
+            _reused(notify, name, plan.stages[name])
+        ops = _NodeOps(plan, store, manifest, result, forced, notify, runner, verbose)
+        if to_run:  # a fully cached run starts no workers (no process pool, no connection to a Dask scheduler)
+            with runner.started(jobs, ops.progress(notify)) as workers:
+                ops.workers = workers
+                graph = _run_graph(plan.graph, to_run, twins)
+                priority = [n for generation in nx.topological_generations(graph) for n in sorted(generation)]
+                drive(graph, priority, jobs, runner.node_slots(jobs),
+                      NodeOps(ops.try_lock, ops.lock, ops.unlock, ops.needed, ops.launch, ops.land))
+        computed_twins = [n for n in twins if twins[n] in result.executed]
+        result.cached += computed_twins
+        manifest.note({name: plan.prov[name] for name in computed_twins})
+        for name in computed_twins:
+            _reused(notify, name, plan.stages[name])
+    except BaseException as exc:
+        error = exc
+        raise
+    finally:
+        notify("spflow_run_end", pipeline=pipeline, result=result, error=error)
+    return result
 
-    def inputs_of(name: str) -> dict[str, xr.Dataset]:
-        out = {}
-        for port, up in pipeline.nodes[name].inputs.items():
-            if up not in memory:
-                memory[up] = store.load(plan.keys[up])
-            out[port] = memory[up]
-        return out
 
-    def finish(name: str, out: Any, seconds: float) -> None:
-        stage = plan.stages[name]
-        if not isinstance(out, xr.Dataset):
-            raise StageError(name, stage.name, f"run() must return an xarray.Dataset, returned {type(out).__name__}")
-        if stage.output is not None:
-            stage.output.validate(out, stage=stage.name, port="output")
-        meta = dict(plan.prov[name], node=name, pipeline=pipeline.name, seconds=round(seconds, 6))
-        store.save(plan.keys[name], out, meta, where=f"node {name!r} (stage {stage.name!r}) output")
-        manifest.note({name: plan.prov[name]})
-        memory[name] = out
-        result.executed.append(name)
-        if verbose:
-            print(f"[spflow] ({len(result.executed)}/{len(to_run)}) {name}: ran {stage.name} in {seconds:.2f} s",
-                  file=sys.stderr)
+def _reused(notify: Callable[..., None], name: str, stage: Stage) -> None:
+    notify("spflow_node_start", node=name, stage=stage, cached=True)
+    notify("spflow_node_end", node=name, stage=stage, seconds=0.0, cached=True)
 
-    def prepare(name: str) -> dict[str, xr.Dataset]:
-        stage = plan.stages[name]
-        inputs = inputs_of(name)
-        for port, ds in inputs.items():
-            schema = stage.inputs.get(port)
-            if schema is not None:
-                schema.validate(ds, stage=stage.name, port=port)
-        return inputs
 
-    sub = _run_graph(plan.graph, to_run, twins)
-    if verbose and to_run:
-        print(f"[spflow] {pipeline.name}: {len(to_run)} node(s) to run, {len(result.cached)} cached", file=sys.stderr)
+class _NodeOps:
+    """The executor's side of each step of a node's life (:class:`~spflow.core.ready_queue.NodeOps`): its key's
+    lock, the look for a result another run stored, loading and checking its inputs, submitting it to the runner,
+    checking and storing its output; with the lifecycle hooks at each step."""
 
-    def still_needed(name: str) -> bool:
+    def __init__(self, plan: _Plan, store: Store, manifest: _Manifest, result: RunResult, forced: set[str],
+                 notify: Callable[..., None], runner: Runner, verbose: bool):
+        self.plan, self.store, self.manifest, self.result, self.runner = plan, store, manifest, result, runner
+        self.forced, self.notify, self.verbose = forced, notify, verbose
+        self.memory: dict[str, xr.Dataset] = {}
+        self.workers: Workers | None = None
+
+    @staticmethod
+    def progress(notify: Callable[..., None]) -> Callable[[str, int, int | None, str], None]:
+        def report(node: str, done: int, total: int | None, what: str) -> None:
+            notify("spflow_node_progress", node=node, done=done, total=total, what=what)
+        return report
+
+    def _acquire(self, name: str, blocking: bool) -> bool:
+        try:
+            return self.store.acquire(self.plan.keys[name], blocking=blocking,
+                                      waiting=f"{name}: another run is computing this node")
+        except OSError as exc:
+            raise CacheError(f"node {name!r}: cannot lock its cache entry in {self.store.root}: {exc}") from exc
+
+    def try_lock(self, name: str) -> bool:
+        return self._acquire(name, blocking=False)
+
+    def lock(self, name: str) -> None:
+        self._acquire(name, blocking=True)
+
+    def unlock(self, name: str) -> None:
+        self.store.release(self.plan.keys[name])
+
+    def needed(self, name: str) -> bool:
         """With the node's lock held: False if another run stored a good entry meanwhile (then it is reused);
         otherwise clear any entry in the way (forced, or failing the checks) and return True."""
-        key = plan.keys[name]
+        key, stage = self.plan.keys[name], self.plan.stages[name]
         try:
-            if store.has(key):
-                if name not in forced and _entry_problem(store, key, plan.stages[name]) is None:
-                    result.cached.append(name)
-                    manifest.note({name: plan.prov[name]})
-                    if verbose:
-                        print(f"[spflow] {name}: computed meanwhile by another run; reused", file=sys.stderr)
+            if self.store.has(key):
+                if name not in self.forced and _entry_problem(self.store, key, stage) is None:
+                    self.result.cached.append(name)
+                    self.manifest.note({name: self.plan.prov[name]})
+                    _reused(self.notify, name, stage)
                     return False
-                store.discard(key)
+                self.store.discard(key)
         except OSError as exc:
-            raise CacheError(f"node {name!r}: cannot replace its cache entry in {store.root}: {exc}") from exc
+            raise CacheError(f"node {name!r}: cannot replace its cache entry in {self.store.root}: {exc}") from exc
         return True
 
-    jb_backend = BACKENDS[backend]
-    with _backend_context(backend, scheduler):
-        for generation in nx.topological_generations(sub):
-            pending = sorted(generation)
-            while pending:
-                mine = _claim(store, pending, plan.keys)
-                pending = [n for n in pending if n not in mine]
-                try:
-                    runnable = [n for n in mine if still_needed(n)]
-                    if jobs > 1 and len(runnable) > 1:
-                        _run_parallel(runnable, plan, prepare, finish, jobs, jb_backend, verbose)
-                    else:
-                        for name in runnable:
-                            _run_serial(name, plan, prepare, finish, jobs, jb_backend, verbose)
-                finally:
-                    for name in mine:
-                        store.release(plan.keys[name])
-    computed_twins = [n for n in twins if twins[n] in result.executed]
-    result.cached += computed_twins
-    manifest.note({name: plan.prov[name] for name in computed_twins})
-    return result
+    def _inputs(self, name: str) -> dict[str, xr.Dataset]:
+        """The node's inputs (from memory, else loaded from the store), checked against its stage's input schemas."""
+        stage = self.plan.stages[name]
+        inputs = {}
+        for port, up in self.plan.pipeline.nodes[name].inputs.items():
+            if up not in self.memory:
+                self.memory[up] = self.store.load(self.plan.keys[up])
+            inputs[port] = self.memory[up]
+            schema = stage.inputs.get(port)
+            if schema is not None:
+                schema.validate(inputs[port], stage=stage.name, port=port)
+        return inputs
+
+    def launch(self, name: str, n_jobs: int) -> Future:
+        stage = self.plan.stages[name]
+        try:
+            inputs = self._inputs(name)
+        except Exception as exc:
+            self.notify("spflow_node_error", node=name, stage=stage, error=exc)
+            raise
+        assert self.workers is not None
+        ctx = StageContext(name, n_jobs=n_jobs, backend=self.runner.inner_backend, verbose=self.verbose,
+                           report=self.workers.report)
+        self.notify("spflow_node_start", node=name, stage=stage, cached=False)
+        return self.workers.submit(_execute, stage, ctx, inputs)
+
+    def land(self, name: str, future: Future) -> None:
+        """Check and store a finished node's output (the moment it arrives: a later failure loses nothing)."""
+        stage = self.plan.stages[name]
+        try:
+            try:
+                out, seconds = future.result()
+            except Exception as exc:
+                raise StageError(name, stage.name, f"{type(exc).__name__}: {exc}") from exc
+            if not isinstance(out, xr.Dataset):
+                raise StageError(name, stage.name,
+                                 f"run() must return an xarray.Dataset, returned {type(out).__name__}")
+            if stage.output is not None:
+                stage.output.validate(out, stage=stage.name, port="output")
+            meta = dict(self.plan.prov[name], node=name, pipeline=self.plan.pipeline.name, seconds=round(seconds, 6))
+            self.store.save(self.plan.keys[name], out, meta, where=f"node {name!r} (stage {stage.name!r}) output")
+        except Exception as exc:
+            self.notify("spflow_node_error", node=name, stage=stage, error=exc)
+            raise
+        self.manifest.note({name: self.plan.prov[name]})
+        self.memory[name] = out
+        self.result.executed.append(name)
+        self.notify("spflow_node_end", node=name, stage=stage, seconds=seconds, cached=False)
 
 
 def _entry_problem(store: Store, key: str, stage: Stage) -> str | None:
@@ -322,31 +367,6 @@ def _entry_problem(store: Store, key: str, stage: Stage) -> str | None:
     return None
 
 
-def _claim(store: Store, pending: list[str], keys: dict[str, str]) -> list[str]:
-    """Lock the keys of as many pending nodes as are free, without waiting; if none is free, wait for the first one
-    (holding no other lock while waiting, so concurrent runs cannot deadlock)."""
-    def acquire(name: str, blocking: bool) -> bool:
-        try:
-            return store.acquire(keys[name], blocking=blocking,
-                                 waiting=f"{name}: another run is computing this node")
-        except OSError as exc:
-            raise CacheError(f"node {name!r}: cannot lock its cache entry in {store.root}: {exc}") from exc
-
-    mine: list[str] = []
-    try:
-        for name in pending:
-            if acquire(name, blocking=False):
-                mine.append(name)
-        if not mine:
-            acquire(pending[0], blocking=True)
-            mine.append(pending[0])
-    except BaseException:  # e.g. KeyboardInterrupt while waiting: hand back what was taken
-        for name in mine:
-            store.release(keys[name])
-        raise
-    return mine
-
-
 class _Manifest:
     """Best-effort updates of a pipeline's manifest: a failed write warns once (:class:`CacheWarning`) and the run
     goes on, since the manifest only feeds ``status``'s explanations."""
@@ -365,18 +385,6 @@ class _Manifest:
                               "explain why a node is stale", CacheWarning, stacklevel=3)
 
 
-def _run_serial(name, plan, prepare, finish, jobs, jb_backend, verbose) -> None:
-    ctx = StageContext(name, n_jobs=jobs, backend=jb_backend, verbose=verbose)
-    inputs = prepare(name)
-    if verbose:
-        print(f"[spflow] {name}: running {plan.stages[name].name} ...", file=sys.stderr)
-    try:
-        out, seconds = _execute(plan.stages[name], ctx, inputs)
-    except Exception as exc:
-        raise StageError(name, plan.stages[name].name, f"{type(exc).__name__}: {exc}") from exc
-    finish(name, out, seconds)
-
-
 def _run_graph(graph: nx.DiGraph, to_run: list[str], twins: dict[str, str]) -> nx.DiGraph:
     """The dependency graph of the nodes to run, a twin's consumers waiting for the node that computes its key."""
     sub = nx.DiGraph()
@@ -386,42 +394,6 @@ def _run_graph(graph: nx.DiGraph, to_run: list[str], twins: dict[str, str]) -> n
         if down in sub and up in sub:
             sub.add_edge(up, down)
     return sub
-
-
-def _run_parallel(generation, plan, prepare, finish, jobs, jb_backend, verbose) -> None:
-    from joblib import Parallel, delayed, parallel_config
-
-    n_jobs = -1 if jb_backend == "dask" else min(jobs, len(generation))
-    tasks = []
-    for name in generation:
-        ctx = StageContext(name, n_jobs=1, backend=jb_backend, verbose=verbose)
-        tasks.append(delayed(_tagged_execute)(name, plan.stages[name], ctx, prepare(name)))
-    extra = {"inner_max_num_threads": 1} if jb_backend == "loky" else {}
-    with parallel_config(backend=jb_backend, **extra):
-        outputs = Parallel(n_jobs=n_jobs, return_as="generator_unordered")(tasks)
-        failures: list[tuple[str, Exception]] = []
-        for name, out, seconds, error in outputs:
-            if error is None:
-                try:
-                    finish(name, out, seconds)
-                except Exception as exc:  # invalid output or failed write: the siblings are still stored
-                    failures.append((name, exc))
-            else:
-                exc, message = error
-                failure = StageError(name, plan.stages[name].name, message)
-                failure.__cause__ = exc
-                failures.append((name, failure))
-    if failures:  # raised once every sibling has finished and been stored
-        raise min(failures, key=lambda item: item[0])[1]
-
-
-def _tagged_execute(name: str, stage: Stage, ctx: StageContext, inputs: dict[str, xr.Dataset]):
-    """Worker-side wrapper: return errors as values so that finished siblings are still stored."""
-    try:
-        out, seconds = _execute(stage, ctx, inputs)
-        return name, out, seconds, None
-    except Exception as exc:
-        return name, None, 0.0, (exc, f"{type(exc).__name__}: {exc}")
 
 
 @dataclass

@@ -7,7 +7,15 @@ the entry-point group ``spflow`` in its ``pyproject.toml``::
     myplugin = "mypackage.spflow_plugin"
 
 Built-in stages and effects register through exactly these hooks (see ``spflow/plugins/builtin.py``).
-All hooks take a ``register`` callable: a plugin calls it once per contribution and the host validates.
+The registration hooks take a ``register`` callable: a plugin calls it once per contribution and the host validates.
+
+The lifecycle hooks (``spflow_run_start`` ... ``spflow_run_end``) are notifications: the executor calls them in the
+process that called :func:`spflow.run` (progress reported by a stage running in a worker process or on a Dask worker
+is relayed there), return values are ignored, and an installed plugin's hook that raises is reported with a
+:class:`~spflow.core.errors.PluginWarning` and the run goes on. They may be called from several threads at once (a
+relay thread delivers the progress of stages running elsewhere), so an implementation that keeps state locks it.
+The built-in log (``spflow/plugins/run_log.py``) and progress report (``spflow/plugins/progress_report.py``) are
+implementations of these hooks like any other.
 """
 
 from __future__ import annotations
@@ -53,4 +61,57 @@ class SpflowHookSpecs:
         (:func:`~spflow.plugins.surrogates.contract.load_surrogate`: validation, calibration, MCMC, figures).
 
         .. versionadded:: 0.1
+        """
+
+    @hookspec
+    def spflow_run_start(self, pipeline, to_run, cached, runner):
+        """A run begins: ``pipeline`` (:class:`~spflow.core.pipeline.Pipeline`), the names of the nodes ``to_run``
+        (in topological order) and of the nodes found ``cached``, and the ``runner`` (a
+        :class:`~spflow.core.runners.Runner`) that will execute them. Called after planning, before any stage runs.
+
+        .. versionadded:: 0.2
+        """
+
+    @hookspec
+    def spflow_node_start(self, node, stage, cached):
+        """Node ``node`` (its :class:`~spflow.core.stage.Stage` instance is ``stage``) begins: submitted to the runner
+        (``cached=False``), or found in the store (``cached=True``: at planning, when another run stored it while
+        this one waited for its lock, or when it is a twin of a node computed in this run).
+
+        .. versionadded:: 0.2
+        """
+
+    @hookspec
+    def spflow_node_progress(self, node, done, total, what):
+        """The stage of ``node`` has done ``done`` of ``total`` units of ``what`` (e.g. ``"samples"``,
+        ``"generations"``, ``"steps"``); reported through :meth:`~spflow.core.stage.StageContext.report_progress`
+        (at most a few times a second, always at ``done == total``). ``total`` may be ``None`` when unknown.
+
+        .. versionadded:: 0.2
+        """
+
+    @hookspec
+    def spflow_node_end(self, node, stage, seconds, cached):
+        """Node ``node`` finished and its result is in the store: computed in ``seconds`` of wall time
+        (``cached=False``), or reused (``cached=True``, ``seconds=0.0``).
+
+        .. versionadded:: 0.2
+        """
+
+    @hookspec
+    def spflow_node_error(self, node, stage, error):
+        """Node ``node`` failed: ``error`` is the :class:`~spflow.core.errors.StageError` (the stage raised or returned
+        something its schema refuses) or :class:`~spflow.core.errors.CacheError` (its result could not be stored).
+        The run stores the nodes still running, starts no new one, and raises the error after ``spflow_run_end``.
+
+        .. versionadded:: 0.2
+        """
+
+    @hookspec
+    def spflow_run_end(self, pipeline, result, error):
+        """The run of ``pipeline`` is over: ``result`` is the :class:`~spflow.core.executor.RunResult` (its
+        ``executed`` and ``cached`` lists as far as the run got); ``error`` is the exception about to be raised, or
+        ``None`` on success (a ``KeyboardInterrupt`` is reported too).
+
+        .. versionadded:: 0.2
         """

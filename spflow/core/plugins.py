@@ -9,7 +9,8 @@ misspelled name, which pluggy's ``check_pending`` would make fatal for everyone)
 :class:`~spflow.core.errors.PluginWarning` naming its entry point and distribution. Each plugin's hook calls are
 isolated: its contributions are collected first and kept only if the call returns, so a raising hook contributes
 nothing (and warns), and a contribution spflow refuses (a stage name already taken) is skipped with a warning while
-the rest of the plugin stays. Plugins registered in-process with :func:`register_plugin` are the caller's own code:
+the rest of the plugin stays. A lifecycle hook (a notification: node started, run ended...) that raises in an installed
+plugin warns once per plugin and hook and the run goes on. Plugins registered in-process with :func:`register_plugin` are the caller's own code:
 their errors are raised. Environment knobs:
 
 ``SPFLOW_DISABLE_PLUGINS``
@@ -23,6 +24,7 @@ from __future__ import annotations
 import importlib.metadata
 import os
 import sys
+import threading
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -37,7 +39,7 @@ from .stage import Stage
 
 __all__ = ["Registry", "get_registry", "reset_registry", "plugin_manager", "register_plugin", "unregister_plugin"]
 
-BUILTIN_PLUGINS = ("spflow.plugins.builtin",)
+BUILTIN_PLUGINS = ("spflow.plugins.builtin", "spflow.plugins.run_log", "spflow.plugins.progress_report")
 
 #: Plugins registered at run time with ``register_plugin`` (e.g. from a notebook or a test), by name.
 _RUNTIME_PLUGINS: dict[str, object] = {}
@@ -51,6 +53,8 @@ class Registry:
     effects: dict[str, Any] = field(default_factory=dict)
     surrogate_kinds: dict[str, type] = field(default_factory=dict)
     providers: dict[str, str] = field(default_factory=dict)
+    #: Calls a lifecycle hook of every plugin: ``registry.notify("spflow_node_end", node=..., ...)``.
+    notify: Callable[..., None] = field(default=lambda hookname, **kwargs: None, repr=False)
 
     def stage(self, name: str) -> type[Stage]:
         try:
@@ -165,8 +169,46 @@ def _call_hook(pm: pluggy.PluginManager, third_party: dict[str, str], hookname: 
                               "rest", PluginWarning, stacklevel=3)
 
 
+class _Notifier:
+    """Calls a lifecycle hook: the built-in and runtime plugins together (their errors propagate: the caller's own
+    code), then each installed third-party plugin on its own, a raising one reported once per plugin and hook with a
+    :class:`PluginWarning` (later failures of that hook are silent) while the run goes on."""
+
+    def __init__(self, pm: pluggy.PluginManager, third_party: dict[str, str]):
+        self.pm, self.third_party = pm, third_party
+        self.callers: dict[str, tuple[Any, list[tuple[str, Any]]]] = {}
+        self.warned: set[tuple[str, str]] = set()
+        self.lock = threading.Lock()
+
+    def _callers(self, hookname: str) -> tuple[Any, list[tuple[str, Any]]]:
+        with self.lock:
+            if hookname not in self.callers:
+                plugins = {name: self.pm.get_plugin(name) for name in self.third_party}
+                own = self.pm.subset_hook_caller(hookname, remove_plugins=list(plugins.values()))
+                each = [(name, self.pm.subset_hook_caller(
+                    hookname, remove_plugins=[p for p in self.pm.get_plugins() if p is not plugin]))
+                    for name, plugin in plugins.items()]
+                self.callers[hookname] = (own, each)
+            return self.callers[hookname]
+
+    def __call__(self, hookname: str, **kwargs: Any) -> None:
+        own, each = self._callers(hookname)
+        own(**kwargs)
+        for name, caller in each:
+            try:
+                caller(**kwargs)
+            except (Exception, SystemExit) as exc:
+                with self.lock:
+                    first = (name, hookname) not in self.warned
+                    self.warned.add((name, hookname))
+                if first:
+                    warnings.warn(f"{self.third_party[name]}: hook {hookname} raised {type(exc).__name__}: {exc}; "
+                                  "spflow goes on (later failures of this hook are not reported)", PluginWarning,
+                                  stacklevel=3)
+
+
 def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Registry:
-    reg = Registry()
+    reg = Registry(notify=_Notifier(pm, third_party))
 
     def register_stage(cls: Any) -> None:
         if not (isinstance(cls, type) and issubclass(cls, Stage)):

@@ -20,9 +20,10 @@ from __future__ import annotations
 
 import hashlib
 import inspect
-import sys
-from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+import time
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from math import inf
 from types import MappingProxyType
 from typing import Any, ClassVar, TypeVar
 
@@ -36,44 +37,60 @@ __all__ = ["Stage", "StageContext"]
 T = TypeVar("T")
 
 
+#: Shortest interval between two progress reports of one node (the last one, ``done == total``, always goes).
+PROGRESS_INTERVAL = 0.2
+
+
 @dataclass
 class StageContext:
     """What a running stage may know about its environment.
 
-    ``n_jobs`` is the number of workers the stage may use for its own inner parallelism (1 when the executor already
-    runs several nodes side by side: one parallel layer per level). ``parallel()`` returns a configured
-    :class:`joblib.Parallel`; ``progress()`` wraps an iterable and reports progress for long stages.
+    ``n_jobs`` is the number of workers the stage may use for its own inner parallelism: the share of the run's
+    worker budget that was free when the node started (1 when other nodes already occupy the rest). ``backend`` is
+    the joblib backend of that inner parallelism (``loky``, ``threading`` or ``dask``, chosen by the runner).
+    ``parallel()`` returns a configured :class:`joblib.Parallel`; ``report_progress(done, total, what)`` and
+    ``progress(iterable)`` report how far a long stage has got (to the ``spflow_node_progress`` hook, through
+    ``report``, which the executor sets; without it they cost nothing). ``verbose`` lets a stage print its own
+    findings.
     """
 
     node: str
     n_jobs: int = 1
     backend: str = "loky"
     verbose: bool = True
+    #: ``report(node, done, total, what)``: where progress goes (set by the executor; picklable for process runners).
+    report: Callable[[str, int, int | None, str], None] | None = None
+    _last_report: float = field(default=-inf, init=False, repr=False, compare=False)
 
     def parallel(self, **kwargs: Any):
         """A joblib ``Parallel`` with this node's worker budget and backend; inner BLAS threads capped at 1."""
-        from joblib import Parallel
+        from joblib import Parallel, parallel_config
 
         if self.n_jobs == 1:
             return Parallel(n_jobs=1, **kwargs)
-        if self.backend == "dask":
-            return Parallel(n_jobs=-1, backend="dask", **kwargs)
-        backend = "threading" if self.backend == "threading" else "loky"
-        extra = {"inner_max_num_threads": 1} if backend == "loky" else {}
-        from joblib import parallel_config
-
-        with parallel_config(backend=backend, **extra):
+        extra = {"inner_max_num_threads": 1} if self.backend == "loky" else {}
+        with parallel_config(backend=self.backend, **extra):
             return Parallel(n_jobs=self.n_jobs, **kwargs)
 
+    def report_progress(self, done: int, total: int | None = None, what: str = "items") -> None:
+        """Report that ``done`` of ``total`` units of ``what`` are done (at most every
+        :data:`PROGRESS_INTERVAL` seconds; ``done == total`` always goes through)."""
+        if self.report is None:
+            return
+        now = time.monotonic()
+        if done != total and now - self._last_report < PROGRESS_INTERVAL:
+            return
+        self._last_report = now
+        self.report(self.node, int(done), None if total is None else int(total), what)
+
     def progress(self, items: Iterable[T], total: int | None = None, what: str = "items") -> Iterator[T]:
-        """Yield ``items`` and print ``[node] k/total`` to stderr about every 10 %."""
+        """Yield ``items``, reporting after each how many are done (``report_progress``)."""
         if total is None and hasattr(items, "__len__"):
             total = len(items)  # type: ignore[arg-type]
-        step = max(1, (total or 0) // 10)
+        self.report_progress(0, total, what)
         for k, item in enumerate(items, 1):
             yield item
-            if self.verbose and total and (k % step == 0 or k == total):
-                print(f"[{self.node}] {k}/{total} {what} ({100 * k // total}%)", file=sys.stderr, flush=True)
+            self.report_progress(k, total, what)
 
 
 class Stage:

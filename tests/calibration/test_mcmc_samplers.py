@@ -156,3 +156,18 @@ def test_bad_input_is_named_before_any_work():
     with pytest.raises(ParameterError, match="oil_cut"):
         MHSampler().run(ctx, surrogate=toy.to_dataset(), observations=observations_for(index, y),
                         space=space_for(NAMES, [-1, -1], [1, 1]))
+
+
+def test_mh_sampler_reports_its_steps():
+    rng = np.random.default_rng(1)
+    blocks, sigma = {("dp", "BCF1"): 12, ("oil_cut", "BCF1"): 9}, [0.5, 0.2]
+    index, a, b, y = _problem(blocks, sigma, rng)
+    toy = LinearToy(NAMES, [-9, -9], [9, 9], index, a, b, np.zeros(len(index)))
+    reports = []
+    ctx = StageContext("mh", n_jobs=1, verbose=False, report=lambda *report: reports.append(report))
+    MHSampler(noise="known", sigma=sigma, samples=2000, burn=500, thin=2, chains=2, seed=1).run(
+        ctx, surrogate=toy.to_dataset(), observations=observations_for(index, y), space=space_for(NAMES, [-8, -8],
+                                                                                                   [8, 8]))
+    # burn-in plus the kept draws times the thinning: 500 + (2000 - 500) // 2 * 2 steps per chain
+    assert reports[0] == ("mh", 0, 2000, "steps") and reports[-1] == ("mh", 2000, 2000, "steps")
+    assert [r[1] for r in reports] == sorted(r[1] for r in reports)

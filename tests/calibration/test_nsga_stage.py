@@ -310,3 +310,13 @@ def test_rerun_after_changing_only_generations_reuses_every_upstream_node(tmp_pa
         assert first["calibration"].attrs["generations_run"] == 3
     finally:
         spflow.unregister_plugin("nsga_test_plugin")
+
+
+def test_each_generation_is_reported_as_progress(space, bundled):
+    reports = []
+    ctx = StageContext("nsga", verbose=False, report=lambda *report: reports.append(report))
+    surrogate, observations = _conflicting(space, bundled)
+    _small_run().run(ctx, surrogate=surrogate.to_dataset(), observations=observations, space=space)
+    mine = [r for r in reports if r[3] == "generations"]
+    assert mine[-1] == ("nsga", 8, 8, "generations")  # the last generation always goes through
+    assert [r[1] for r in mine] == sorted(r[1] for r in mine) and set(r[1] for r in mine) <= set(range(1, 9))

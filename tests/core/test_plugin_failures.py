@@ -11,6 +11,7 @@ import textwrap
 import uuid
 
 import pytest
+import xarray as xr
 
 import spflow
 from spflow.core.plugins import get_registry, reset_registry
@@ -199,3 +200,43 @@ def test_a_plugin_pipeline_exiting_at_import_is_a_warning(site, tmp_path):
                             r"SystemExit\(4\)"):
         names = [info.name for info in available_pipelines()]
     assert "exiting" not in names and "workflow" in names
+
+
+RAISING_LIFECYCLE = '''
+import spflow
+
+@spflow.hookimpl
+def spflow_node_end(node, stage, seconds, cached):
+    raise RuntimeError("dashboard unreachable")
+'''
+
+COUNTING_LIFECYCLE = '''
+import spflow
+
+ENDS = []
+
+@spflow.hookimpl
+def spflow_node_end(node, stage, seconds, cached):
+    ENDS.append(node)
+'''
+
+
+def test_a_raising_lifecycle_hook_warns_once_and_the_run_goes_on(site, tmp_path):
+    site("raising_lifecycle", RAISING_LIFECYCLE)
+    counting = site("counting", COUNTING_LIFECYCLE)
+    registry = get_registry()
+    path = tmp_path / "in.nc"
+    xr.Dataset({"y": ("x", [3.0, 4.0], {"units": "m"})}).to_netcdf(path)
+    p = spflow.Pipeline("lifecycle")
+    p.add_data("x", xr.Dataset({"y": ("x", [1.0, 2.0], {"units": "m"})}))
+    p.add("r1", "load_netcdf", params={"path": str(path)})
+    with pytest.warns(spflow.PluginWarning) as caught:
+        result = spflow.run(p, cache=tmp_path / "cache")
+    messages = [str(w.message) for w in caught if issubclass(w.category, spflow.PluginWarning)]
+    assert len(messages) == 1, messages  # two nodes ended, one warning
+    assert messages[0].startswith("plugin 'raising_lifecycle' (plug_raising_lifecycle_")
+    assert "hook spflow_node_end raised RuntimeError: dashboard unreachable; spflow goes on" in messages[0]
+    assert sorted(result.executed) == ["r1", "x"]
+    assert sorted(sys.modules[counting].ENDS) == ["r1", "x"]  # the healthy plugin saw every node
+    assert registry is get_registry()
+

@@ -25,6 +25,15 @@ def executions(log: Path) -> list[str]:
     return log.read_text().split() if log.exists() else []
 
 
+def _wait_for(path: str, seconds: float = 60.0) -> None:
+    """Block until the file ``path`` exists (another node creates it); fail after ``seconds``."""
+    deadline = time.monotonic() + seconds
+    while path and not Path(path).exists():
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"gave up waiting for {path}: the node creating it never ran")
+        time.sleep(0.01)
+
+
 class Source(Stage):
     name = "toy_source"
     description = "y = value * arange(n)"
@@ -34,10 +43,12 @@ class Source(Stage):
         "n": Param(int, 5, bounds=(1, 10_000)),
         "log": Param(str, ""),
         "delay": Param(float, 0.0, bounds=(0.0, 10.0), unit="s", doc="sleep this long (to overlap concurrent runs)"),
+        "wait_for": Param(str, "", doc="finish only once this file exists (another node creates it)"),
     }
 
     def run(self, ctx, **inputs):
         time.sleep(self.params["delay"])
+        _wait_for(self.params["wait_for"])
         _log(self.params["log"], f"source:{self.params['value']}")
         y = self.params["value"] * np.arange(self.params["n"], dtype=float)
         return xr.Dataset({"y": ("x", y, {"units": "m"})})
@@ -49,10 +60,13 @@ class Scale(Stage):
     inputs = {"data": SERIES}
     output = SERIES
     params = {"factor": Param(float, 2.0, bounds=(0.0, 10.0)), "log": Param(str, ""),
-              "delay": Param(float, 0.0, bounds=(0.0, 10.0), unit="s")}
+              "delay": Param(float, 0.0, bounds=(0.0, 10.0), unit="s"),
+              "touch": Param(str, "", doc="create this file when running (a signal to a waiting node)")}
 
     def run(self, ctx, data):
         time.sleep(self.params["delay"])
+        if self.params["touch"]:
+            Path(self.params["touch"]).touch()
         _log(self.params["log"], f"scale:{self.params['factor']}")
         return data * self.params["factor"]
 
@@ -118,6 +132,19 @@ class InnerParallel(Stage):
         return out
 
 
+class Steps(Stage):
+    """Counts ``n`` steps through ``ctx.progress`` (each ``pause`` seconds long) and returns y = arange(n)."""
+
+    name = "toy_steps"
+    output = SERIES
+    params = {"n": Param(int, 5, bounds=(1, 10_000)), "pause": Param(float, 0.0, bounds=(0.0, 1.0), unit="s")}
+
+    def run(self, ctx):
+        for _ in ctx.progress(range(self.params["n"]), what="steps"):
+            time.sleep(self.params["pause"])
+        return xr.Dataset({"y": ("x", np.arange(self.params["n"], dtype=float), {"units": "m"})})
+
+
 def _square(v: float) -> float:
     return v * v
 
@@ -128,7 +155,7 @@ def _square_delayed(v):
     return delayed(_square)(v)
 
 
-STAGES = [Source, Scale, Add, Fail, BadOutput, InnerParallel]
+STAGES = [Source, Scale, Add, Fail, BadOutput, InnerParallel, Steps]
 
 
 @spflow.hookimpl

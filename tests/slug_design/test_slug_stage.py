@@ -145,3 +145,12 @@ def test_objective_draws_do_not_depend_on_the_workers_and_repeat_with_the_seed()
     assert len(np.unique(y1[:, 0])) == 4
     # the next call continues the random stream: new draws, not a repeat
     assert not np.array_equal(serial(X), y1)
+
+
+def test_bgo_iterations_are_reported_as_progress():
+    reports = []
+    ctx = StageContext("slug", n_jobs=1, verbose=False, report=lambda *report: reports.append(report))
+    SlugDesign(**(TINY | {"drift": -1e-5, "volatility": 0.0})).run(ctx)
+    bgo = [r for r in reports if r[3] == "BGO iterations"]
+    assert bgo[0] == ("slug", 0, TINY["max_iter"], "BGO iterations")  # after the initial design
+    assert bgo[-1] == ("slug", TINY["max_iter"], TINY["max_iter"], "BGO iterations")

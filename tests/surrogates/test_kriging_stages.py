@@ -63,3 +63,17 @@ def test_pipeline_swaps_pce_for_pck_and_gp(tmp_path):
 def test_bad_stage_parameters_fail_at_construction(cls, params, match):
     with pytest.raises(ParameterError, match=match):
         cls(**params)
+
+
+def test_gp_stage_reports_its_length_scale_fits():
+    from test_pce_stages import _design, _points, _responses, _space
+
+    from spflow.core.stage import StageContext
+
+    x = _points(12, 1)
+    reports = []
+    ctx = StageContext("gp", verbose=False, report=lambda *report: reports.append(report))
+    GPStage(variables=["dp", "recovery"], experiments=["BCF1"], share="variable", restarts=1).run(
+        ctx, space=_space(), design=_design(x), responses=_responses(x))
+    # one length-scale set per variable: two fits, reported from 0 to 2
+    assert reports[0] == ("gp", 0, 2, "length-scale fits") and reports[-1] == ("gp", 2, 2, "length-scale fits")

@@ -164,3 +164,12 @@ def test_bad_inputs_fail_before_fitting(fitted):
     with pytest.raises(ParameterError, match="design's parameters"):
         SurrogateValidation().run(CTX, surrogate=fitted, design=_design(x, names=["AD31", "CRK"]),
                                   responses=_responses(x))
+
+
+def test_pce_stage_reports_the_degrees_it_tries():
+    x = _points(30, 0)
+    reports = []
+    ctx = StageContext(node="pce", verbose=False, report=lambda *report: reports.append(report))
+    PCEStage(variables=["dp"], experiments=["BCF1"], degree_max=3, solver="ols").run(
+        ctx, space=_space(), design=_design(x), responses=_responses(x))
+    assert reports[0] == ("pce", 1, 3, "degrees") and reports[-1] == ("pce", 3, 3, "degrees")

@@ -86,10 +86,14 @@ class MHSampler(SamplerStage):
                                         blobs_dtype=float)
         sampler.random_state = np.random.RandomState(int(rngs[0].integers(2**32))).get_state()
         state, done, adapted = start, 0, np.zeros(chains, dtype=bool)
-        for n in ctx.progress(np.diff(np.r_[0:p["burn"]:p["tune_interval"], p["burn"]]), what="tuning blocks"):
+        kept = (p["samples"] - p["burn"]) // p["thin"]
+        steps = p["burn"] + kept * p["thin"]
+        ctx.report_progress(0, steps, "steps")
+        for n in np.diff(np.r_[0:p["burn"]:p["tune_interval"], p["burn"]]):
             accepted = sampler.acceptance_fraction * sampler.iteration if done else np.zeros(chains)
             state = sampler.run_mcmc(state, n, skip_initial_state_check=True)
             done += n
+            ctx.report_progress(done, steps, "steps")
             proposal.scale *= [pymc_tune_factor(r) for r in (sampler.acceptance_fraction * done - accepted) / n]
             history = sampler.get_chain()[done // 2:]
             for c in range(chains) if p["adapt_covariance"] and len(history) > 2 * model.ndim else ():
@@ -99,8 +103,10 @@ class MHSampler(SamplerStage):
                     proposal.scale[c] = proposal.scale[c] if adapted[c] else 1.0
                     adapted[c] = True
         sampler.reset()
-        sampler.run_mcmc(state, (p["samples"] - p["burn"]) // p["thin"], thin_by=p["thin"],
-                         skip_initial_state_check=True)
+        # what run_mcmc does, reporting each kept step
+        for k, _ in enumerate(sampler.sample(state, iterations=kept, thin_by=p["thin"], skip_initial_state_check=True),
+                              1):
+            ctx.report_progress(done + k * p["thin"], steps, "steps")
         x, log_post, log_lik = sampler.get_chain(), sampler.get_log_prob(), sampler.get_blobs()
         return [ChainResult(x=x[None, :, c], log_posterior=log_post[None, :, c], log_likelihood=log_lik[None, :, c],
                             acceptance=sampler.acceptance_fraction[c:c + 1]) for c in range(chains)]

@@ -34,11 +34,14 @@ HV_REFERENCE = 1.1
 
 
 class CalibrationHistory(Callback):
-    """Records the run (see module docstring); ``heldout(points) -> misfits (n, n_experiment, n_variable)``."""
+    """Records the run (see module docstring); ``heldout(points) -> misfits (n, n_experiment, n_variable)``;
+    ``progress(generation, generations)`` (e.g. ``ctx.report_progress``) is told each finished generation."""
 
     def __init__(self, generations: int, n_cross: int, sigma_tol: float, snapshots: list[int],
-                 heldout: Callable[[np.ndarray], np.ndarray]):
+                 heldout: Callable[[np.ndarray], np.ndarray],
+                 progress: Callable[[int, int], None] = lambda generation, generations: None):
         super().__init__()
+        self.progress = progress
         self.generations, self.n_cross, self.sigma_tol = generations, n_cross, sigma_tol
         self.snapshots = set(snapshots)
         self.heldout = heldout
@@ -83,3 +86,4 @@ class CalibrationHistory(Callback):
                 last = True
         if generation in self.snapshots or last:
             self.fronts[generation] = (X.copy(), F.copy())
+        self.progress(generation, self.generations)

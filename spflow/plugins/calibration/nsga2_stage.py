@@ -188,7 +188,8 @@ class NSGA2Calibration(Stage):
         noise = NoiseMisfit(observations, problem.aligned, problem.pairs)
         heldout = HeldOutCheck(self.forward, observations, p["variables"], mapping)
         history = CalibrationHistory(p["generations"], p["n_cross"], p["sigma_tol"], p["snapshots"],
-                                     lambda points: heldout.misfits(ctx, points))
+                                     lambda points: heldout.misfits(ctx, points),
+                                     lambda generation, total: ctx.report_progress(generation, total, "generations"))
         algorithm = thesis_nsga2(pop_size=p["population"], tournament=p["tournament"],
                                  crossover_prob=p["crossover_prob"], mutation_prob=p["mutation_prob"],
                                  crossover_eta=p["crossover_eta"], mutation_eta=p["mutation_eta"])

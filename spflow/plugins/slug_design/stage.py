@@ -59,12 +59,15 @@ _PRICE_PATHS = 20  # sample paths kept for Fig. 4.6
 _PRICE_TIMES = 2000  # about this many times kept per path
 
 
-def _snapshot_recorder(wanted: set[int], store: dict[int, BGOResult]):
-    """A run_bgo callback keeping the partial result after each wanted number of BGO iterations (and the last)."""
+def _snapshot_recorder(wanted: set[int], store: dict[int, BGOResult], ctx: StageContext, max_iter: int):
+    """A run_bgo callback keeping the partial result after each wanted number of BGO iterations (and the last), and
+    reporting the iterations done as progress (of ``max_iter``; at a stop before it, of the iterations done)."""
     def record(result: BGOResult) -> None:
         done = int(result.iteration.max())
-        if done in wanted or result.stop_reason != "running":
+        running = result.stop_reason == "running"
+        if done in wanted or not running:
             store[done] = result
+        ctx.report_progress(done, max_iter if running else done, "BGO iterations")
     return record
 
 
@@ -162,7 +165,7 @@ class SlugDesign(Stage):
         snapshots: dict[int, BGOResult] = {}
         result = run_bgo(objective, design_bounds(), n_init=p["n_init"], max_iter=p["max_iter"], rtol=p["rtol"],
                          min_iter=p["min_iter"], batch=p["batch"], seed=p["seed"], reference=reference,
-                         callback=_snapshot_recorder(set(p["snapshots"]), snapshots))
+                         callback=_snapshot_recorder(set(p["snapshots"]), snapshots, ctx, p["max_iter"]))
         out = result.to_dataset(design_names=DESIGN_VARIABLES, design_units=("PV",) * 3,
                                 objective_names=OBJECTIVES, objective_units=OBJECTIVE_UNITS)
         out["posterior_draw"] = ("evaluation", np.array([e["draw"] for e in objective.log]),

@@ -20,7 +20,7 @@ without being fitted. The fits run on one BLAS thread (:mod:`.blas`; the matrice
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -115,10 +115,12 @@ def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], so
 
 def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = 5, q: float | Sequence[float] = 0.9,
             solver: str = "ols", target_loo: float | None = None, early_stop: bool = True,
-            parallel=None) -> PCEFit:
+            parallel=None, progress: Callable[[int, int], None] | None = None) -> PCEFit:
     """Fit a PCE of ``y`` (N,) or (N, m) at points ``z`` (N, d) of [-1, 1]^d, choosing degree and q as above.
 
-    ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers.
+    ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers;
+    ``progress(degree, degree_max)`` (e.g. from ``ctx.report_progress``) is told each degree tried, and
+    ``(degree_max, degree_max)`` at the end.
     """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     y = np.asarray(y, dtype=float)
@@ -146,9 +148,13 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = 5, q: float | Sequen
             if len(q_scores) > 2 and min(q_scores[-2:]) >= min(q_scores[:-2]):
                 break
         degree_scores.append(degree_best)
+        if progress is not None and degree < degree_max:
+            progress(degree, degree_max)
         if target_loo is not None and best_score <= target_loo:
             break
         if early_stop and len(degree_scores) > 2 and min(degree_scores[-2:]) > min(degree_scores[:-2]):
             break
+    if progress is not None:  # done, whether at degree_max or stopped early
+        progress(degree_max, degree_max)
     indices, coef, degree, qv, loo, modified, emp = best
     return PCEFit(indices, coef, degree, qv, solver, loo, modified, emp, y.var(axis=0), history)

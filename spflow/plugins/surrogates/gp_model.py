@@ -22,10 +22,10 @@ class GP(KrigingSurrogate):
     @classmethod
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
             y: np.ndarray, *, kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
-            restarts: int = 5, seed: int = 0, parallel=None) -> GP:
+            restarts: int = 5, seed: int = 0, parallel=None, progress=None) -> GP:
         """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
         constant = np.zeros((1, len(names)), dtype=np.int64)
         orders = [np.zeros(1, dtype=np.int64)] * len(outputs)
         return cls.fit_trends(names, lower, upper, outputs, x, y, constant, orders, mode="sequential",
                               kernel=kernel, share=share, nugget=nugget, restarts=restarts, seed=seed,
-                              parallel=parallel)
+                              parallel=parallel, progress=progress)

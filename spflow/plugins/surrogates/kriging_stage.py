@@ -54,6 +54,7 @@ class _KrigingStage(Stage):
         data = training_set(space, design, responses, list(self.params["variables"]), list(self.params["experiments"]))
         options = {k: self.params[k] for k in ("kernel", "share", "restarts", "seed", "nugget")}
         options["parallel"] = ctx.parallel() if ctx.n_jobs > 1 else None
+        options["progress"] = lambda groups: ctx.progress(groups, what="length-scale fits")
         return self._fit(data, options).to_dataset()
 
 

@@ -155,11 +155,12 @@ class KrigingSurrogate(Surrogate):
     def fit_trends(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
                    x: np.ndarray, y: np.ndarray, indices: np.ndarray, orders: list[np.ndarray], *, mode: str,
                    kernel: str, share: str, nugget: float, restarts: int, seed: int, parallel=None,
-                   info: dict | None = None) -> KrigingSurrogate:
+                   info: dict | None = None, progress=None) -> KrigingSurrogate:
         """Fit length scales (and, in ``optimal`` mode, trend sizes) group by group and build the surrogate.
 
         ``indices`` (P, d) are the trend candidates; ``orders[j]`` ranks column j's candidates (rows of ``indices``).
-        ``parallel`` (a :class:`joblib.Parallel`) spreads the groups over workers.
+        ``parallel`` (a :class:`joblib.Parallel`) spreads the groups over workers; ``progress`` (e.g.
+        ``ctx.progress``) wraps the iterable of groups to report how many were fitted (dispatched, in parallel).
         """
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
         lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
@@ -176,12 +177,13 @@ class KrigingSurrogate(Surrogate):
             local = [np.searchsorted(used, orders[j]) for j in cols]
             jobs.append((cols, used, (z, y[:, cols], basis[:, used], local, mode, kernel, nugget, restarts,
                                       int(seeds[g]))))
+        groups = jobs if progress is None else progress(jobs)
         if parallel is None:
-            results = [fit_group(*args) for _, _, args in jobs]
+            results = [fit_group(*args) for _, _, args in groups]
         else:
             from joblib import delayed
 
-            results = parallel(delayed(fit_group)(*args) for _, _, args in jobs)
+            results = parallel(delayed(fit_group)(*args) for _, _, args in groups)
         trend = np.zeros((y.shape[1], indices.shape[0]), dtype=bool)
         lengthscale = np.empty((len(jobs), len(names)))
         for g, ((cols, used, _), (mask, lengths)) in enumerate(zip(jobs, results)):

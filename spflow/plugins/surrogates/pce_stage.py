@@ -36,9 +36,10 @@ PCE_PARAMS = {
 
 
 def fit_options(params, ctx: StageContext) -> dict:
-    """Keyword arguments of :func:`.degree_adaptive.fit_pce` from a stage's parameters."""
+    """Keyword arguments of :func:`.degree_adaptive.fit_pce` from a stage's parameters (progress: degrees tried)."""
     return {"degree_max": params["degree_max"], "q": params["q"], "solver": params["solver"],
-            "target_loo": params["target_loo"], "parallel": ctx.parallel() if ctx.n_jobs > 1 else None}
+            "target_loo": params["target_loo"], "parallel": ctx.parallel() if ctx.n_jobs > 1 else None,
+            "progress": lambda degree, degree_max: ctx.report_progress(degree, degree_max, "degrees")}
 
 
 def check_lists(stage: str, params) -> None:

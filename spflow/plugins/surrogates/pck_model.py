@@ -29,7 +29,7 @@ class PCK(KrigingSurrogate):
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
             y: np.ndarray, *, degree_max: int = 3, q: float = 0.9, mode: str = "sequential",
             kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8, restarts: int = 5, seed: int = 0,
-            parallel=None) -> PCK:
+            parallel=None, progress=None) -> PCK:
         """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
         lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
@@ -41,4 +41,4 @@ class PCK(KrigingSurrogate):
         info = {"pce_degree": pce.degree, "pce_q": pce.q, "pce_loo_mean": pce.loo_mean}
         return cls.fit_trends(names, lower, upper, outputs, x, y, pce.indices[used], orders, mode=mode,
                               kernel=kernel, share=share, nugget=nugget, restarts=restarts, seed=seed,
-                              parallel=parallel, info=info)
+                              parallel=parallel, info=info, progress=progress)
