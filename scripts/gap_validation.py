@@ -300,8 +300,10 @@ def run_next_experiment(record: dict, directory: Path) -> dict:
         runs["proposal"] = out["proposal"]["forward_runs"]
         new = added_coreflood(base, truth, as_schedule(proposal.summary["schedule"]), seed + NEXT_SEED_OFFSET,
                               cells)
-        out["added"] = {"experiment": NEXT_EXPERIMENT, "role": "calibration", "seed": seed + NEXT_SEED_OFFSET}
         after = diagnose([data[0], new], [data[1]], base, CATALOGUE, options)
+        out["added"] = {"experiment": NEXT_EXPERIMENT, "role": "calibration", "seed": seed + NEXT_SEED_OFFSET,
+                        "calibration": [e.name for e in after.calibration],
+                        "heldout": [e.name for e in after.heldout]}
         out["after"] = outcome(after, base, truth, variables)
         runs["diagnosis_after"] = after.forward_runs
     return out | {"forward_runs": runs, "wall_s": time.perf_counter() - start,
@@ -450,9 +452,10 @@ def lift_metrics(records: list[dict], lifts: list[dict]) -> dict:
     id and seed; a twin counts as done when its phase record exists).
 
     * ``ambiguous`` / ``done``: ambiguous twins (:func:`is_ambiguous`) among the records and how many are done;
-    * ``before`` / ``after``: among the done ambiguous single-effect twins (all SNR, and SNR >= 3), the rate of the
-      truth named first and of the truth inside the ambiguity set, from the first-phase record and from the
-      diagnosis with the added coreflood;
+    * ``all`` / ``snr3``: among the done ambiguous single-effect twins (all SNR, and SNR >= 3), ``before`` (the
+      first-phase record) and ``after`` (the diagnosis with the added coreflood) rates of the truth named first,
+      of the truth inside the ambiguity set and of the truth alone (first accepted set exactly the truth; 0 before
+      by definition of an ambiguous twin);
     * ``study``: :func:`metrics` of every record (LIFT_METRICS keys) before, and after substituting each done
       ambiguous twin's result with the added coreflood (a twin without a proposal keeps its first result);
     * ``predicted``: over the done twins whose truth is one of the proposal's hypotheses, the mean predicted
@@ -467,7 +470,8 @@ def lift_metrics(records: list[dict], lifts: list[dict]) -> dict:
 
     def rates(rows, view):
         return {"correct_first": _rate(_first(view(r)) == _truth_name(r) for r in rows),
-                "truth_in_set": _rate(_truth_name(r) in (view(r)["ambiguity_set"] or []) for r in rows)}
+                "truth_in_set": _rate(_truth_name(r) in (view(r)["ambiguity_set"] or []) for r in rows),
+                "truth_alone": _rate(view(r)["accepted"][:1] == [[_truth_name(r)]] for r in rows)}
 
     out = {"ambiguous": len(ambiguous), "done": len(done),
            "reproduced": sum(by_id[r["id"]]["reproduces_first_phase"] for r in done),
@@ -572,13 +576,13 @@ def _lift_section(records: list[dict], lifts: list[dict]) -> tuple[list[str], di
              "proposed design (same core and measurement chain, its own noise seed) as a second calibration "
              "coreflood, BCF2 still held out (`run_next_experiment`).", ""]
     if m["done"]:
-        lines += ["| ambiguous single-effect twins | n | correct first before | after | truth in set before | after |",
-                  "|---|---|---|---|---|---|"]
+        lines += ["| ambiguous single-effect twins | n | correct first before | after | truth in set before | after "
+                  "| truth alone before | after |", "|---|---|---|---|---|---|---|---|"]
         for label, title in (("all", "all SNR"), ("snr3", "SNR >= 3")):
             b, a = m[label]["before"], m[label]["after"]
-            lines.append(f"| {title} | {b['correct_first'][1]} | {_fmt(b['correct_first'][0])} | "
-                         f"{_fmt(a['correct_first'][0])} | {_fmt(b['truth_in_set'][0])} | "
-                         f"{_fmt(a['truth_in_set'][0])} |")
+            lines.append(f"| {title} | {b['correct_first'][1]} | "
+                         + " | ".join(f"{_fmt(b[k][0])} | {_fmt(a[k][0])}"
+                                      for k in ("correct_first", "truth_in_set", "truth_alone")) + " |")
         lines += ["", "Study-wide, each done ambiguous twin's result replaced by its result with the added coreflood:",
                   "", "| metric | before | after | n | target | met (after) |", "|---|---|---|---|---|---|"]
         for key, (op, goal) in LIFT_METRICS.items():

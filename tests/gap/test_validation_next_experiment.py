@@ -11,10 +11,12 @@ import pytest
 import xarray as xr
 
 from spflow.io.format import schedule_json
-from spflow.plugins.forward.schedule import BCF_SCHEDULES
+from spflow.io.schedule_file import read_schedule_file
+from spflow.plugins.forward.schedule import BCF_SCHEDULES, as_schedule
 from spflow.plugins.forward.simulate import simulate
 from spflow.plugins.gap.base_model import TABLE_3_2_BASE, BaseModel
 from spflow.plugins.gap.design_space import design_space
+from spflow.plugins.gap.verdict import VERDICTS
 from spflow.synthetic import NoiseModel, measure
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "gap_validation.py"
@@ -126,6 +128,8 @@ def test_lift_metrics_by_hand():
     assert m["all"]["before"]["truth_in_set"] == pytest.approx((2 / 3, 3))
     assert m["all"]["after"]["truth_in_set"] == pytest.approx((1 / 3, 3))
     assert m["snr3"]["after"]["correct_first"] == (0.5, 2)
+    assert m["all"]["before"]["truth_alone"] == (0.0, 3)
+    assert m["all"]["after"]["truth_alone"] == pytest.approx((1 / 3, 3))
     # study-wide at SNR >= 3 (cap#0, cap#1, disp#0): top1 1/3 before, 2/3 after; false alarms unchanged (null#1
     # has no phase result yet)
     study = m["study"]
@@ -149,3 +153,30 @@ def test_report_section_says_how_many_are_done(tmp_path):
     assert "next-experiment phase done for 3 of 4 (partial results)" in text
     payload = json.loads(md.with_suffix(".json").read_text())
     assert payload["sets"]["Δp + oil cut"]["next_experiment"]["metrics"]["done"] == 3
+
+
+def test_phase_end_to_end_on_an_ambiguous_twin(tmp_path):
+    """A 12-cell shear-thinning twin whose diagnosis leaves shear thinning and the polymer's salinity dependence
+    in one set (~45 s CPU): the phase regenerates it, proposes a design for exactly that set, writes the proposal,
+    diagnoses with the design's coreflood as second calibration flood, and skips the twin when run again."""
+    cells, seed = 12, 501000
+    first = gv.run_twin({"id": "single:shear_thinning#1", "scenario": "single:shear_thinning",
+                         "effects": ["shear_thinning"]}, cells, seed, gv.SETS["dp_oil"][1])
+    assert gv.is_ambiguous(first), f"the test twin is no longer ambiguous ({first['ambiguity_set']}): pick another"
+    (tmp_path / "dp_oil.jsonl").write_text(json.dumps(first) + "\n")
+    file = gv.next_experiment_phase(tmp_path, "dp_oil", cells, 1)
+    [x] = [json.loads(line) for line in file.read_text().splitlines()]
+    assert x["reproduces_first_phase"]
+    assert {k: x["before"][k] for k in ("verdict", "accepted", "ambiguity_set")} == \
+        {k: first[k] for k in ("verdict", "accepted", "ambiguity_set")}
+    assert x["truth_effects"] == first["truth_effects"]
+    assert set(x["proposal"]["hypotheses"]) == set(first["ambiguity_set"])
+    assert 0.0 <= x["proposal"]["worst_accuracy"] <= 1.0
+    folder = tmp_path / "next_experiment" / "dp_oil" / "single_shear_thinning_1"
+    assert read_schedule_file(folder / "next_experiment.toml") == as_schedule(x["proposal"]["schedule"])
+    assert x["added"]["calibration"] == ["BCF1", "next_experiment"] and x["added"]["heldout"] == ["BCF2"]
+    assert x["added"]["seed"] == seed + gv.NEXT_SEED_OFFSET
+    assert x["after"]["verdict"] in VERDICTS
+    assert x["forward_runs"]["diagnosis_after"] > 0 and x["forward_runs"]["proposal"] > 0
+    gv.next_experiment_phase(tmp_path, "dp_oil", cells, 1)  # resumed: nothing left to run
+    assert len(file.read_text().splitlines()) == 1
