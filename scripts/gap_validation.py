@@ -226,6 +226,13 @@ def _step0(g) -> list[dict]:
 #: ``seed`` and ``seed + 1``; twins' seeds are 1000 apart, so no two corefloods of the study share a seed)
 NEXT_SEED_OFFSET = 2
 NEXT_EXPERIMENT = "next_experiment"
+#: where the added coreflood goes: "calibration" (the default, run_next_experiment says why) or "heldout"
+ADDED_AS = ("calibration", "heldout")
+
+
+def next_experiment_file(results: Path, key: str, role: str) -> Path:
+    """The next-experiment phase's results file of result set ``key`` with the added coreflood as ``role`` data."""
+    return results / f"{key}.{NEXT_EXPERIMENT}{'' if role == 'calibration' else '_' + role}.jsonl"
 
 
 def is_ambiguous(record: dict) -> bool:
@@ -261,7 +268,7 @@ def _proposal_fields(proposal) -> dict:
             "forward_runs": int(proposal.table.attrs["forward_runs"])}
 
 
-def run_next_experiment(record: dict, directory: Path) -> dict:
+def run_next_experiment(record: dict, directory: Path, role: str = "calibration") -> dict:
     """The next-experiment phase of one ambiguous first-phase twin (``record``).
 
     The twin is regenerated from the record's scenario and seed (:func:`twin`: the same truth and the same two
@@ -279,8 +286,11 @@ def run_next_experiment(record: dict, directory: Path) -> dict:
     not let the flood designed to separate the candidates also be their judge with parameters not fitted to it.
     The designer's predicted accuracy assumes the latter (the new flood scored as held-out data on the
     calibrated hypotheses), so it is an estimate, not a prediction, of the realised rate; the report sets them
-    side by side.
+    side by side. ``role="heldout"`` adds it to the held-out data instead (BCF1 calibrates, BCF2 and the new flood
+    score the candidates): the designer's own setting, to measure what the choice costs.
     """
+    if role not in ADDED_AS:
+        raise ValueError(f"role must be one of {list(ADDED_AS)}, got {role!r}")
     start_cpu, start = time.process_time(), time.perf_counter()
     variables = tuple(record["variables"])
     cells, seed = record["cells"], record["seed"]
@@ -300,8 +310,9 @@ def run_next_experiment(record: dict, directory: Path) -> dict:
         runs["proposal"] = out["proposal"]["forward_runs"]
         new = added_coreflood(base, truth, as_schedule(proposal.summary["schedule"]), seed + NEXT_SEED_OFFSET,
                               cells)
-        after = diagnose([data[0], new], [data[1]], base, CATALOGUE, options)
-        out["added"] = {"experiment": NEXT_EXPERIMENT, "role": "calibration", "seed": seed + NEXT_SEED_OFFSET,
+        cal, held = ([data[0], new], [data[1]]) if role == "calibration" else ([data[0]], [data[1], new])
+        after = diagnose(cal, held, base, CATALOGUE, options)
+        out["added"] = {"experiment": NEXT_EXPERIMENT, "role": role, "seed": seed + NEXT_SEED_OFFSET,
                         "calibration": [e.name for e in after.calibration],
                         "heldout": [e.name for e in after.heldout]}
         out["after"] = outcome(after, base, truth, variables)
@@ -564,8 +575,9 @@ def _section(records: list[dict], figure: Path, md: Path) -> tuple[list[str], di
     return lines + ["", "</details>", ""], payload
 
 
-def _lift_section(records: list[dict], lifts: list[dict]) -> tuple[list[str], dict]:
-    """Markdown lines and the JSON payload of the section "after the proposed next experiment"."""
+def _lift_section(records: list[dict], lifts: list[dict], role: str) -> tuple[list[str], dict]:
+    """Markdown lines and the JSON payload of the section "after the proposed next experiment" (added coreflood as
+    ``role`` data)."""
     m = lift_metrics(records, lifts)
     by_id = {x["id"]: x for x in lifts}
     lines = [f"Ambiguous twins (final ambiguity set of two or more candidates): {m['ambiguous']} of {len(records)}; "
@@ -573,8 +585,9 @@ def _lift_section(records: list[dict], lifts: list[dict]) -> tuple[list[str], di
              + (" (partial results)" if m["done"] < m["ambiguous"] else "") + f"; {m['reproduced']} of {m['done']} "
              "regenerated diagnoses reproduce the first phase's verdict and sets; "
              f"{m['without_proposal']} without a proposal. Each done twin got the truth's coreflood on the "
-             "proposed design (same core and measurement chain, its own noise seed) as a second calibration "
-             "coreflood, BCF2 still held out (`run_next_experiment`).", ""]
+             "proposed design (same core and measurement chain, its own noise seed) "
+             + ("as a second calibration coreflood, BCF2 still held out" if role == "calibration" else
+                "as a second held-out coreflood (BCF1 alone calibrates)") + " (`run_next_experiment`).", ""]
     if m["done"]:
         lines += ["| ambiguous single-effect twins | n | correct first before | after | truth in set before | after "
                   "| truth alone before | after |", "|---|---|---|---|---|---|---|---|"]
@@ -596,7 +609,9 @@ def _lift_section(records: list[dict], lifts: list[dict]) -> tuple[list[str], di
                   f"{p['realised'][1]}): mean predicted decision accuracy of the truth "
                   f"{_fmt(p['accuracy_of_truth'][0])}, realised {_fmt(p['realised'][0])} (the diagnosis with "
                   "the added coreflood answers the truth alone). The prediction scores the new coreflood as "
-                  "held-out data; here it is calibration data and BCF2 decides.", "",
+                  "held-out data" + ("; here it is calibration data and BCF2 decides." if role == "calibration"
+                                     else ", as here (next to BCF2).")
+                  , "",
                   "| twin | truth | SNR | before | proposal | predicted accuracy | after | CPU s |",
                   "|---|---|---|---|---|---|---|---|"]
         for r in records:
@@ -615,13 +630,14 @@ def _lift_section(records: list[dict], lifts: list[dict]) -> tuple[list[str], di
         cpu = [x["cpu_s"] for x in lifts]
         lines += ["", f"CPU per twin of the phase: median {np.median(cpu):.0f} s (two diagnoses and the design "
                   f"ranking), {len(cpu)} twins."]
-    return lines + [""], {"metrics": m, "twins": lifts}
+    return lines + [""], {"metrics": m, "added_as": role, "twins": lifts}
 
 
 def write_report(sets: dict[str, list[dict]], md: Path, commands: list[str],
-                 lifts: dict[str, list[dict]] | None = None) -> None:
+                 lifts: dict[str, dict[str, list[dict]]] | None = None) -> None:
     """Write ``md`` and the JSON next to it from the result sets (title -> twin records) and the results of the
-    next-experiment phase (title -> its records; a set without any has no such section)."""
+    next-experiment phase (title -> {role of the added coreflood -> its records}; a set without any has no such
+    section)."""
     lifts = lifts or {}
     payload, lines = {}, ["# Gap diagnosis: withheld-effect twin study", "",
                           "Protocol: `scripts/gap_validation.py` (docstring) and `docs/gap.md`. Generated by "
@@ -631,9 +647,9 @@ def write_report(sets: dict[str, list[dict]], md: Path, commands: list[str],
     for k, (title, records) in enumerate(sets.items()):
         section, payload[title] = _section(records, md.parent / "figures" / f"gap_power_{k}.png", md)
         lines += [f"## {title}", ""] + section
-        if title in lifts:
-            section, payload[title]["next_experiment"] = _lift_section(records, lifts[title])
-            lines += [f"### {title}: after the proposed next experiment", ""] + section
+        for role, phase in lifts.get(title, {}).items():
+            section, payload[title][f"next_experiment_{role}"] = _lift_section(records, phase, role)
+            lines += [f"### {title}: after the proposed next experiment (added as {role} data)", ""] + section
     md.with_suffix(".json").write_text(json.dumps({"commands": commands, "sets": payload}, indent=1))
     md.write_text("\n".join(lines) + "\n")
 
@@ -674,14 +690,14 @@ def _records(file: Path, cells: int) -> dict[str, dict]:
     return {r["id"]: r for r in map(json.loads, file.read_text().splitlines()) if r["cells"] == cells}
 
 
-def next_experiment_phase(results: Path, key: str, cells: int, jobs: int) -> Path:
-    """Run :func:`run_next_experiment` on every ambiguous twin of ``results/<key>.jsonl`` not yet in
-    ``results/<key>.next_experiment.jsonl`` (appended as each finishes); proposals go to
-    ``results/next_experiment/<key>/<twin>/``. Returns the phase's results file."""
+def next_experiment_phase(results: Path, key: str, cells: int, jobs: int, role: str = "calibration") -> Path:
+    """Run :func:`run_next_experiment` (added coreflood as ``role`` data) on every ambiguous twin of
+    ``results/<key>.jsonl`` not yet in its results file (:func:`next_experiment_file`, appended as each finishes);
+    proposals go to ``results/next_experiment/<key>/<twin>/``. Returns the phase's results file."""
     from joblib import Parallel, delayed
 
     first = _records(results / f"{key}.jsonl", cells)
-    file = results / f"{key}.{NEXT_EXPERIMENT}.jsonl"
+    file = next_experiment_file(results, key, role)
     done = {i for i, r in _records(file, cells).items() if first.get(i, {}).get("seed") == r["seed"]}
     todo = [r for r in first.values() if is_ambiguous(r) and r["id"] not in done]
     print(f"{sum(map(is_ambiguous, first.values()))} ambiguous of {len(first)} finished twins, {len(todo)} to run",
@@ -689,7 +705,7 @@ def next_experiment_phase(results: Path, key: str, cells: int, jobs: int) -> Pat
     folder = results / NEXT_EXPERIMENT / key
     with file.open("a") as fh:
         for x in Parallel(n_jobs=jobs, return_as="generator")(
-                delayed(run_next_experiment)(r, folder / r["id"].replace(":", "_").replace("#", "_"))
+                delayed(run_next_experiment)(r, folder / r["id"].replace(":", "_").replace("#", "_"), role)
                 for r in todo):
             fh.write(json.dumps(x) + "\n")
             fh.flush()
@@ -714,6 +730,8 @@ def main(argv=None) -> int:
     p.add_argument("--next-experiment", action="store_true",
                    help="second phase: on the finished twins whose diagnosis is ambiguous, add the proposed next "
                         "coreflood and diagnose again (run_next_experiment); the twin counts are not used")
+    p.add_argument("--added-as", choices=ADDED_AS, default="calibration",
+                   help="with --next-experiment: the added coreflood as calibration (default) or held-out data")
     p.add_argument("--cells", type=int, default=30)
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--seed", type=int, default=20260101)
@@ -727,7 +745,7 @@ def main(argv=None) -> int:
     results.mkdir(parents=True, exist_ok=True)
     command = "python scripts/gap_validation.py " + " ".join(sys.argv[1:] if argv is None else argv)
     if args.next_experiment:
-        file = next_experiment_phase(results, key, args.cells, args.jobs)
+        file = next_experiment_phase(results, key, args.cells, args.jobs, args.added_as)
         file.with_suffix(".command").write_text(command)
     else:
         counts = (8, 4, 4, 4) if args.reduced else (args.null, args.per_effect, args.pairs, args.ooc)
@@ -748,10 +766,14 @@ def main(argv=None) -> int:
         (results / f"{key}.command").write_text(command)
     sets, lifts, commands = {}, {}, []
     for name, (title, _) in SETS.items():
-        for suffix in ("", f".{NEXT_EXPERIMENT}"):
-            path = results / f"{name}{suffix}.jsonl"
+        paths = {None: results / f"{name}.jsonl"} | {r: next_experiment_file(results, name, r) for r in ADDED_AS}
+        for role, path in paths.items():
             if path.exists():
-                (lifts if suffix else sets)[title] = list(_records(path, args.cells).values())
+                found = list(_records(path, args.cells).values())
+                if role is None:
+                    sets[title] = found
+                else:
+                    lifts.setdefault(title, {})[role] = found
                 command_file = path.with_suffix(".command")
                 commands.append(command_file.read_text() if command_file.exists() else path.stem)
     out = Path(args.out)

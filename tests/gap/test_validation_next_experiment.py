@@ -147,12 +147,12 @@ def test_lift_metrics_by_hand():
 
 def test_report_section_says_how_many_are_done(tmp_path):
     md = tmp_path / "report.md"
-    gv.write_report({"Δp + oil cut": RECORDS}, md, ["test"], {"Δp + oil cut": LIFTS})
+    gv.write_report({"Δp + oil cut": RECORDS}, md, ["test"], {"Δp + oil cut": {"calibration": LIFTS}})
     text = md.read_text()
     assert "after the proposed next experiment" in text
     assert "next-experiment phase done for 3 of 4 (partial results)" in text
     payload = json.loads(md.with_suffix(".json").read_text())
-    assert payload["sets"]["Δp + oil cut"]["next_experiment"]["metrics"]["done"] == 3
+    assert payload["sets"]["Δp + oil cut"]["next_experiment_calibration"]["metrics"]["done"] == 3
 
 
 def test_phase_end_to_end_on_an_ambiguous_twin(tmp_path):
