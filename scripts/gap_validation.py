@@ -27,8 +27,9 @@ regenerated from its record's scenario and seed, diagnosed again to obtain the d
 ``spflow.plugins.gap.next_after_diagnosis.propose_next_experiment`` ranks the corefloods a lab could run next on
 the twin's core, and the truth's coreflood on the best design (same measurement chain, noise seed ``seed + 2``)
 is added as a second calibration coreflood before the twin is diagnosed once more (:func:`run_next_experiment`
-says why calibration). Results go to ``<key>.next_experiment.jsonl`` next to the first phase's (resumable, like
-it) and the proposals' files to ``next_experiment/<key>/<twin>/``; the report gets a section "after the proposed
+says why calibration; ``--added-as heldout`` scores it next to BCF2 instead). Results go to
+``<key>.next_experiment.jsonl`` (``..._heldout.jsonl``) next to the first phase's (resumable, like it) and the
+proposals' files to ``next_experiment/<key>/<twin>/``; the report gets a section "after the proposed
 next experiment" per result set (before/after rates among the ambiguous twins, the study-wide metrics with their
 results substituted, predicted against realised decision accuracy), partial results included.
 
