@@ -22,9 +22,22 @@ Results accumulate in JSON-lines files (``out/gap_validation/{dp_oil,effluent}.j
 twins, so a long study can be stopped and resumed); the report (``docs/gap_validation.md`` + ``.json`` and
 ``docs/figures/gap_power_*.png``) is rebuilt from all results.
 
+**Second phase: the proposed next experiment** (``--next-experiment``, issue 20). For every finished twin whose
+diagnosis is ambiguous (its final ambiguity set holds two or more candidates, :func:`is_ambiguous`) the twin is
+regenerated from its record's scenario and seed, diagnosed again to obtain the diagnosis object,
+``spflow.plugins.gap.next_after_diagnosis.propose_next_experiment`` ranks the corefloods a lab could run next on
+the twin's core, and the truth's coreflood on the best design (same measurement chain, noise seed ``seed + 2``)
+is added as a second calibration coreflood before the twin is diagnosed once more (:func:`run_next_experiment`
+says why calibration; ``--added-as heldout`` scores it next to BCF2 instead). Results go to
+``<key>.next_experiment.jsonl`` (``..._heldout.jsonl``) next to the first phase's (resumable, like it) and the
+proposals' files to ``next_experiment/<key>/<twin>/``; the report gets a section "after the proposed
+next experiment" per result set (before/after rates among the ambiguous twins, the study-wide metrics with their
+results substituted, predicted against realised decision accuracy), partial results included.
+
     python scripts/gap_validation.py --null 60 --per-effect 30 --pairs 30 --ooc 30 --jobs 2     # the full study
     python scripts/gap_validation.py --reduced --jobs 2                                            # ~15 min CPU
     python scripts/gap_validation.py --reduced --effluent --jobs 2      # with effluent concentrations
+    python scripts/gap_validation.py --next-experiment --jobs 2       # the second phase on the dp_oil results
 """
 
 from __future__ import annotations
@@ -38,12 +51,14 @@ from pathlib import Path
 import numpy as np
 
 from spflow.plugins.forward.effects import BUILTIN_EFFECTS
+from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.gap.base_model import TABLE_3_2_BASE, BaseModel
 from spflow.plugins.gap.catalogue import candidates_for
 from spflow.plugins.gap.diagnosis import Options, diagnose
 from spflow.plugins.gap.fingerprints import NuisanceProjector
 from spflow.plugins.gap.layout import make_layout
 from spflow.plugins.gap.least_squares import WhitenedProblem
+from spflow.plugins.gap.next_after_diagnosis import propose_next_experiment
 from spflow.plugins.gap.observed import load_experiments
 from spflow.plugins.gap.prediction import Predictor
 from spflow.plugins.gap.report import report_dataset, summary
@@ -120,16 +135,38 @@ def _snr(base: BaseModel, truth: dict, data, variables) -> float:
     return NuisanceProjector(jac, Options().nuisance_scale).norm(g)
 
 
+def twin(spec: dict, cells: int, seed: int) -> tuple[BaseModel, dict, list]:
+    """The base model, the truth and the two lab-like corefloods (BCF1 calibration, BCF2 held out) of twin ``spec``
+    generated from ``seed`` (the truth from ``seed``, the measurement noise of coreflood ``k`` from ``seed + k``)."""
+    base = _base(cells)
+    truth = _truth(spec, base, seed)
+    data = [make_coreflood(s, _truth_params(base, truth), effects=truth["effects"], noise=NoiseModel(),
+                           seed=seed + k, cells=cells) for k, s in enumerate(("BCF1", "BCF2"))]
+    return base, truth, data
+
+
+def _truth_params(base: BaseModel, truth: dict) -> dict:
+    """The truth's forward-model parameters: the base model's at the drawn point plus the fixed changes."""
+    return {**base.forward_params(base.values(truth["u"])), **truth["fixed"]}
+
+
 def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...]) -> dict:
     """Generate one twin, diagnose it blind (likelihood ``variables``), and score the diagnosis against the truth."""
     start_cpu, start = time.process_time(), time.perf_counter()
-    base = _base(cells)
-    truth = _truth(spec, base, seed)
-    params = {**base.forward_params(base.values(truth["u"])), **truth["fixed"]}
-    data = [make_coreflood(s, params, effects=truth["effects"], noise=NoiseModel(), seed=seed + k, cells=cells)
-            for k, s in enumerate(("BCF1", "BCF2"))]
+    base, truth, data = twin(spec, cells, seed)
     snr = _snr(base, truth, data[0], variables)
     g = diagnose([data[0]], [data[1]], base, CATALOGUE, Options(variables=variables))
+    return {
+        "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
+        "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], "snr": snr,
+        **outcome(g, base, truth, variables),
+        "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
+        "cpu_s": time.process_time() - start_cpu,
+    }
+
+
+def outcome(g, base: BaseModel, truth: dict, variables: tuple[str, ...]) -> dict:
+    """The fields of a twin record that come from its diagnosis ``g`` (verdict, sets, ranking, fit quality)."""
     s = summary(report_dataset(g))
     refitted = [r["name"] for r in s["ranked_effects"] if r["shortlisted"]]
     screened = [r["name"] for r in sorted(s["ranked_effects"], key=lambda r: -(r["screen_z"] or -1e9))]
@@ -139,12 +176,9 @@ def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...]) -> d
     span = base.upper - base.lower
     bias = {m: float(np.median(np.abs(base.values(f.u) - theta_true) / span))
             for m, f in (("base", g.base_fit), ("final", g.final_fit))}
-    strengths = g.final_fit.strengths
     return {
-        "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
-        "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], "snr": snr,
         "verdict": s["verdict"], "ambiguity_set": s["ambiguity_set"], "accepted": s["accepted_steps"],
-        "ranking": ranking, "fitted_strengths": strengths,
+        "ranking": ranking, "fitted_strengths": g.final_fit.strengths,
         "gap_closed_calibration": s["gap_closed"]["calibration"], "gap_closed_heldout": s["gap_closed"]["heldout"],
         "heldout_rmse_ratio": math.sqrt(s["fit"]["chi2_heldout_final"] / s["fit"]["chi2_heldout_base"]),
         "coverage_heldout": [s["coverage"]["heldout_base"], s["coverage"]["heldout_final"]],
@@ -152,8 +186,6 @@ def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...]) -> d
         "chi2_pvalue": s["fit"]["chi2_pvalue"],
         "where": _where(g, variables),
         "step0": _step0(g),
-        "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
-        "cpu_s": time.process_time() - start_cpu,
     }
 
 
@@ -189,6 +221,106 @@ def _step0(g) -> list[dict]:
                     "passes": passes(x, g.options.rule), "pair_se": pair_se, "delta_loo": loo[0],
                     "delta_loo_se": loo[1], "pareto_k_max": loo[2]})
     return out
+
+
+# ------------------------------------------------------------------------------------- the next-experiment phase
+#: a twin's proposed coreflood is measured with noise seed ``seed + NEXT_SEED_OFFSET`` (its BCF1 and BCF2 use
+#: ``seed`` and ``seed + 1``; twins' seeds are 1000 apart, so no two corefloods of the study share a seed)
+NEXT_SEED_OFFSET = 2
+NEXT_EXPERIMENT = "next_experiment"
+#: where the added coreflood goes: "calibration" (the default, run_next_experiment says why) or "heldout"
+ADDED_AS = ("calibration", "heldout")
+
+
+def next_experiment_file(results: Path, key: str, role: str) -> Path:
+    """The next-experiment phase's results file of result set ``key`` with the added coreflood as ``role`` data."""
+    return results / f"{key}.{NEXT_EXPERIMENT}{'' if role == 'calibration' else '_' + role}.jsonl"
+
+
+def is_ambiguous(record: dict) -> bool:
+    """Whether a first-phase twin goes into the next-experiment phase: its diagnosis's final ambiguity set
+    (``GapDiagnosis.ambiguity``: the first accepted step's set, the record's ``ambiguity_set``) holds two or more
+    candidates -- exactly the twins for which ``propose_next_experiment`` has competing hypotheses. A twin whose
+    verdict is ``ambiguous`` only through a later step (first set a single effect, a second set of several) is not
+    in the phase: its first answer is decided, and the proposal separates the first set only."""
+    return len(record["ambiguity_set"] or []) >= 2
+
+
+def twin_spec(record: dict) -> dict:
+    """The twin specification of a first-phase record (what :func:`twin` regenerates it from)."""
+    spec = {"scenario": record["scenario"], "id": record["id"]}
+    if record["scenario"].startswith("single:"):
+        spec["effects"] = [record["scenario"].removeprefix("single:")]
+    return spec
+
+
+def added_coreflood(base: BaseModel, truth: dict, schedule, seed: int, cells: int):
+    """The truth's lab-like coreflood on ``schedule`` (the proposed design): the twin's core, truth parameters and
+    effects and measurement chain (``NoiseModel()``, as BCF1 and BCF2), noise seed ``seed``."""
+    return make_coreflood(schedule, _truth_params(base, truth), effects=truth["effects"], noise=NoiseModel(),
+                          seed=seed, cells=cells, experiment=NEXT_EXPERIMENT)
+
+
+def _proposal_fields(proposal) -> dict:
+    s = proposal.summary
+    return {**{k: s[k] for k in ("label", "kind", "hypotheses", "total_pv", "duration_h", "worst_accuracy",
+                                 "mean_accuracy", "accuracy", "worst_expected_log_ratio_nat", "pairs",
+                                 "schedule")},
+            "runners_up": [r["label"] for r in s["runners_up"]],
+            "forward_runs": int(proposal.table.attrs["forward_runs"])}
+
+
+def run_next_experiment(record: dict, directory: Path, role: str = "calibration") -> dict:
+    """The next-experiment phase of one ambiguous first-phase twin (``record``).
+
+    The twin is regenerated from the record's scenario and seed (:func:`twin`: the same truth and the same two
+    corefloods, bit for bit) and diagnosed again with the same options, which gives the :class:`GapDiagnosis` the
+    proposal needs (the record holds only its summary; ``reproduces_first_phase`` says whether the verdict, the
+    accepted steps and the ambiguity set came out as recorded). ``propose_next_experiment`` ranks the design space
+    of BCF1 for the final ambiguity set and writes the proposal into ``directory``; the truth's coreflood on the
+    best design is generated through the same measurement chain with noise seed ``seed + NEXT_SEED_OFFSET`` and
+    the twin is diagnosed again with it.
+
+    The new coreflood joins the **calibration** data (BCF1 + the new flood; BCF2 stays held out). That is what a
+    lab does with a coreflood run to settle a question: every hypothesis is recalibrated on all the data measured,
+    and the decision is still taken on the flood none of them was fitted to. It keeps the diagnosis unchanged
+    (the same held-out flood and decision rule before and after, so the two verdicts are comparable) and does
+    not let the flood designed to separate the candidates also be their judge with parameters not fitted to it.
+    The designer's predicted accuracy assumes the latter (the new flood scored as held-out data on the
+    calibrated hypotheses), so it is an estimate, not a prediction, of the realised rate; the report sets them
+    side by side. ``role="heldout"`` adds it to the held-out data instead (BCF1 calibrates, BCF2 and the new flood
+    score the candidates): the designer's own setting, to measure what the choice costs.
+    """
+    if role not in ADDED_AS:
+        raise ValueError(f"role must be one of {list(ADDED_AS)}, got {role!r}")
+    start_cpu, start = time.process_time(), time.perf_counter()
+    variables = tuple(record["variables"])
+    cells, seed = record["cells"], record["seed"]
+    base, truth, data = twin(twin_spec(record), cells, seed)
+    options = Options(variables=variables)
+    g = diagnose([data[0]], [data[1]], base, CATALOGUE, options)
+    before = outcome(g, base, truth, variables)
+    out = {"id": record["id"], "scenario": record["scenario"], "seed": seed, "cells": cells,
+           "variables": list(variables), "truth_effects": truth["effects"], "truth_fixed": truth["fixed"],
+           "snr": record["snr"],
+           "reproduces_first_phase": all(before[k] == record[k] for k in ("verdict", "accepted", "ambiguity_set")),
+           "before": before, "proposal": None, "added": None, "after": None}
+    runs = {"diagnosis_before": g.forward_runs}
+    proposal = propose_next_experiment(g, directory)
+    if proposal is not None:
+        out["proposal"] = _proposal_fields(proposal)
+        runs["proposal"] = out["proposal"]["forward_runs"]
+        new = added_coreflood(base, truth, as_schedule(proposal.summary["schedule"]), seed + NEXT_SEED_OFFSET,
+                              cells)
+        cal, held = ([data[0], new], [data[1]]) if role == "calibration" else ([data[0]], [data[1], new])
+        after = diagnose(cal, held, base, CATALOGUE, options)
+        out["added"] = {"experiment": NEXT_EXPERIMENT, "role": role, "seed": seed + NEXT_SEED_OFFSET,
+                        "calibration": [e.name for e in after.calibration],
+                        "heldout": [e.name for e in after.heldout]}
+        out["after"] = outcome(after, base, truth, variables)
+        runs["diagnosis_after"] = after.forward_runs
+    return out | {"forward_runs": runs, "wall_s": time.perf_counter() - start,
+                  "cpu_s": time.process_time() - start_cpu}
 
 
 # ---------------------------------------------------------------------------------------------------- metrics
@@ -315,6 +447,61 @@ def power(records: list[dict]) -> list[dict]:
     return out
 
 
+#: the study-wide metrics recomputed with the next experiment's results (issue 20's acceptance), and their targets
+LIFT_METRICS = {"false_alarm_null": ("<=", 0.05), "detection_snr3": (">=", 0.90), "top1_snr3": (">=", 0.80),
+                "truth_in_set_snr3": (">=", 0.90), "mean_set_size_snr3": ("<=", 2.0)}
+
+
+def _first(r: dict) -> str | None:
+    return r["accepted"][0][0] if r["accepted"] else None
+
+
+def _truth_name(r: dict) -> str:
+    return next(iter(r["truth_effects"]))
+
+
+def lift_metrics(records: list[dict], lifts: list[dict]) -> dict:
+    """What the next experiment changed: first-phase ``records`` and next-experiment-phase ``lifts`` (matched by
+    id and seed; a twin counts as done when its phase record exists).
+
+    * ``ambiguous`` / ``done``: ambiguous twins (:func:`is_ambiguous`) among the records and how many are done;
+    * ``all`` / ``snr3``: among the done ambiguous single-effect twins (all SNR, and SNR >= 3), ``before`` (the
+      first-phase record) and ``after`` (the diagnosis with the added coreflood) rates of the truth named first,
+      of the truth inside the ambiguity set and of the truth alone (first accepted set exactly the truth; 0 before
+      by definition of an ambiguous twin);
+    * ``study``: :func:`metrics` of every record (LIFT_METRICS keys) before, and after substituting each done
+      ambiguous twin's result with the added coreflood (a twin without a proposal keeps its first result);
+    * ``predicted``: over the done twins whose truth is one of the proposal's hypotheses, the mean predicted
+      decision accuracy of the truth and the realised rate of the diagnosis with the added coreflood answering the
+      truth alone (first accepted set exactly the truth), the event the accuracy predicts.
+    """
+    ambiguous = [r for r in records if is_ambiguous(r)]
+    by_id = {x["id"]: x for x in lifts}
+    done = [r for r in ambiguous if r["id"] in by_id and by_id[r["id"]]["seed"] == r["seed"]]
+    after = {r["id"]: {**r, **by_id[r["id"]]["after"]} if by_id[r["id"]]["after"] else r for r in done}
+    single = [r for r in done if r["scenario"].startswith("single:")]
+
+    def rates(rows, view):
+        return {"correct_first": _rate(_first(view(r)) == _truth_name(r) for r in rows),
+                "truth_in_set": _rate(_truth_name(r) in (view(r)["ambiguity_set"] or []) for r in rows),
+                "truth_alone": _rate(view(r)["accepted"][:1] == [[_truth_name(r)]] for r in rows)}
+
+    out = {"ambiguous": len(ambiguous), "done": len(done),
+           "reproduced": sum(by_id[r["id"]]["reproduces_first_phase"] for r in done),
+           "without_proposal": sum(by_id[r["id"]]["proposal"] is None for r in done)}
+    for label, rows in (("all", single), ("snr3", [r for r in single if r["snr"] >= 3])):
+        out[label] = {"before": rates(rows, lambda r: r), "after": rates(rows, lambda r: after[r["id"]])}
+    substituted = [after.get(r["id"], r) for r in records]
+    study = {"before": metrics(records), "after": metrics(substituted)}
+    out["study"] = {k: {when: study[when][k] for when in study} for k in LIFT_METRICS}
+    hits = [(by_id[r["id"]]["proposal"]["accuracy"][_truth_name(r)], after[r["id"]]["accepted"][:1] ==
+             [[_truth_name(r)]]) for r in single if by_id[r["id"]]["proposal"]
+            and _truth_name(r) in by_id[r["id"]]["proposal"]["accuracy"]]
+    out["predicted"] = {"accuracy_of_truth": _mean(h[0] for h in hits if h[0] is not None),
+                        "realised": _rate(h[1] for h in hits)}
+    return out
+
+
 TARGETS = {
     "false_alarm_null": ("<=", 0.05), "detection_snr3": (">=", 0.90), "top1_snr3": (">=", 0.65),
     "truth_in_set_snr3": (">=", 0.90), "mean_set_size_snr3": ("<=", 2.0), "ooc_flagged": (">=", 0.70),
@@ -390,8 +577,70 @@ def _section(records: list[dict], figure: Path, md: Path) -> tuple[list[str], di
     return lines + ["", "</details>", ""], payload
 
 
-def write_report(sets: dict[str, list[dict]], md: Path, commands: list[str]) -> None:
-    """Write ``md`` and the JSON next to it from the result sets (title -> twin records)."""
+def _lift_section(records: list[dict], lifts: list[dict], role: str) -> tuple[list[str], dict]:
+    """Markdown lines and the JSON payload of the section "after the proposed next experiment" (added coreflood as
+    ``role`` data)."""
+    m = lift_metrics(records, lifts)
+    by_id = {x["id"]: x for x in lifts}
+    lines = [f"Ambiguous twins (final ambiguity set of two or more candidates): {m['ambiguous']} of {len(records)}; "
+             f"next-experiment phase done for {m['done']} of {m['ambiguous']}"
+             + (" (partial results)" if m["done"] < m["ambiguous"] else "") + f"; {m['reproduced']} of {m['done']} "
+             "regenerated diagnoses reproduce the first phase's verdict and sets; "
+             f"{m['without_proposal']} without a proposal. Each done twin got the truth's coreflood on the "
+             "proposed design (same core and measurement chain, its own noise seed) "
+             + ("as a second calibration coreflood, BCF2 still held out" if role == "calibration" else
+                "as a second held-out coreflood (BCF1 alone calibrates)") + " (`run_next_experiment`).", ""]
+    if m["done"]:
+        lines += ["| ambiguous single-effect twins | n | correct first before | after | truth in set before | after "
+                  "| truth alone before | after |", "|---|---|---|---|---|---|---|---|"]
+        for label, title in (("all", "all SNR"), ("snr3", "SNR >= 3")):
+            b, a = m[label]["before"], m[label]["after"]
+            lines.append(f"| {title} | {b['correct_first'][1]} | "
+                         + " | ".join(f"{_fmt(b[k][0])} | {_fmt(a[k][0])}"
+                                      for k in ("correct_first", "truth_in_set", "truth_alone")) + " |")
+        lines += ["", "Study-wide, each done ambiguous twin's result replaced by its result with the added coreflood:",
+                  "", "| metric | before | after | n | target | met (after) |", "|---|---|---|---|---|---|"]
+        for key, (op, goal) in LIFT_METRICS.items():
+            b, a = m["study"][key]["before"], m["study"][key]["after"]
+            met = "" if not np.isfinite(a["value"]) else \
+                ("yes" if (a["value"] <= goal if op == "<=" else a["value"] >= goal) else "**no**")
+            lines.append(f"| {key} | {_fmt(b['value'], '.3g')} | {_fmt(a['value'], '.3g')} | {a['n']} | "
+                         f"{op} {goal:g} | {met} |")
+        p = m["predicted"]
+        lines += ["", f"Predicted against realised (twins whose truth is one of the proposal's hypotheses, n = "
+                  f"{p['realised'][1]}): mean predicted decision accuracy of the truth "
+                  f"{_fmt(p['accuracy_of_truth'][0])}, realised {_fmt(p['realised'][0])} (the diagnosis with "
+                  "the added coreflood answers the truth alone). The prediction scores the new coreflood as "
+                  "held-out data" + ("; here it is calibration data and BCF2 decides." if role == "calibration"
+                                     else ", as here (next to BCF2).")
+                  , "",
+                  "| twin | truth | SNR | before | proposal | predicted accuracy | after | CPU s |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for r in records:
+            x = by_id.get(r["id"])
+            if x is None or not is_ambiguous(r) or x["seed"] != r["seed"]:
+                continue
+            truth = ", ".join(f"{k}={v:.3g}" for k, v in {**r["truth_effects"], **r["truth_fixed"]}.items()) or "–"
+            prop = x["proposal"]
+            acc = "–" if prop is None else ", ".join(f"{k} {_fmt(v)}" for k, v in prop["accuracy"].items())
+            after = x["after"]
+            lines.append(f"| {r['id']} | {truth} | {_fmt(r['snr'], '.1f')} | {r['verdict']} "
+                         f"{'/'.join(r['ambiguity_set'])} | {'–' if prop is None else prop['label']} | {acc} | "
+                         + ("–" if after is None else f"{after['verdict']} "
+                            f"{' + '.join('/'.join(a) for a in after['accepted']) or '–'}")
+                         + f" | {x['cpu_s']:.0f} |")
+        cpu = [x["cpu_s"] for x in lifts]
+        lines += ["", f"CPU per twin of the phase: median {np.median(cpu):.0f} s (two diagnoses and the design "
+                  f"ranking), {len(cpu)} twins."]
+    return lines + [""], {"metrics": m, "added_as": role, "twins": lifts}
+
+
+def write_report(sets: dict[str, list[dict]], md: Path, commands: list[str],
+                 lifts: dict[str, dict[str, list[dict]]] | None = None) -> None:
+    """Write ``md`` and the JSON next to it from the result sets (title -> twin records) and the results of the
+    next-experiment phase (title -> {role of the added coreflood -> its records}; a set without any has no such
+    section)."""
+    lifts = lifts or {}
     payload, lines = {}, ["# Gap diagnosis: withheld-effect twin study", "",
                           "Protocol: `scripts/gap_validation.py` (docstring) and `docs/gap.md`. Generated by "
                           + ", ".join(f"`{c}`" for c in commands) + "; the JSON next to this file holds every twin. "
@@ -401,6 +650,9 @@ def write_report(sets: dict[str, list[dict]], md: Path, commands: list[str]) -> 
     for k, (title, records) in enumerate(sets.items()):
         section, payload[title] = _section(records, md.parent / "figures" / f"gap_power_{k}.png", md)
         lines += [f"## {title}", ""] + section
+        for role, phase in lifts.get(title, {}).items():
+            section, payload[title][f"next_experiment_{role}"] = _lift_section(records, phase, role)
+            lines += [f"### {title}: after the proposed next experiment (added as {role} data)", ""] + section
     md.with_suffix(".json").write_text(json.dumps({"commands": commands, "sets": payload}, indent=1))
     md.write_text("\n".join(lines) + "\n")
 
@@ -434,6 +686,39 @@ SETS = {"dp_oil": ("Δp + oil cut", ("dp", "oil_cut")),
         "effluent": ("Δp + oil cut + effluent polymer and surfactant", EFFLUENT)}
 
 
+def _records(file: Path, cells: int) -> dict[str, dict]:
+    """Finished twins of a JSON-lines results file at ``cells`` cells, by id (none if the file does not exist)."""
+    if not file.exists():
+        return {}
+    return {r["id"]: r for r in map(json.loads, file.read_text().splitlines()) if r["cells"] == cells}
+
+
+def next_experiment_phase(results: Path, key: str, cells: int, jobs: int, role: str = "calibration") -> Path:
+    """Run :func:`run_next_experiment` (added coreflood as ``role`` data) on every ambiguous twin of
+    ``results/<key>.jsonl`` not yet in its results file (:func:`next_experiment_file`, appended as each finishes);
+    proposals go to ``results/next_experiment/<key>/<twin>/``. Returns the phase's results file."""
+    from joblib import Parallel, delayed
+
+    first = _records(results / f"{key}.jsonl", cells)
+    file = next_experiment_file(results, key, role)
+    done = {i for i, r in _records(file, cells).items() if first.get(i, {}).get("seed") == r["seed"]}
+    todo = [r for r in first.values() if is_ambiguous(r) and r["id"] not in done]
+    print(f"{sum(map(is_ambiguous, first.values()))} ambiguous of {len(first)} finished twins, {len(todo)} to run",
+          flush=True)
+    folder = results / NEXT_EXPERIMENT / key
+    with file.open("a") as fh:
+        for x in Parallel(n_jobs=jobs, return_as="generator")(
+                delayed(run_next_experiment)(r, folder / r["id"].replace(":", "_").replace("#", "_"), role)
+                for r in todo):
+            fh.write(json.dumps(x) + "\n")
+            fh.flush()
+            after = x["after"] or {"verdict": "(no proposal)", "accepted": []}
+            print(f"{x['id']:<40} {x['before']['verdict']} {x['before']['ambiguity_set']} -> "
+                  f"{(x['proposal'] or {}).get('label', '-')} -> {after['verdict']} {after['accepted']} "
+                  f"cpu {x['cpu_s']:.0f}s", flush=True)
+    return file
+
+
 def main(argv=None) -> int:
     import sys
 
@@ -445,6 +730,11 @@ def main(argv=None) -> int:
     p.add_argument("--reduced", action="store_true", help="a ~15 min CPU subset: 8 null, 4 per effect, 4 pairs, "
                                                           "4 out-of-catalogue")
     p.add_argument("--effluent", action="store_true", help="add effluent polymer and surfactant to the likelihood")
+    p.add_argument("--next-experiment", action="store_true",
+                   help="second phase: on the finished twins whose diagnosis is ambiguous, add the proposed next "
+                        "coreflood and diagnose again (run_next_experiment); the twin counts are not used")
+    p.add_argument("--added-as", choices=ADDED_AS, default="calibration",
+                   help="with --next-experiment: the added coreflood as calibration (default) or held-out data")
     p.add_argument("--cells", type=int, default=30)
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--seed", type=int, default=20260101)
@@ -454,37 +744,43 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     key = "effluent" if args.effluent else "dp_oil"
     variables = SETS[key][1]
-    counts = (8, 4, 4, 4) if args.reduced else (args.null, args.per_effect, args.pairs, args.ooc)
-    specs = scenarios(*counts)
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
-    file = results / f"{key}.jsonl"
-    done = {}
-    if file.exists():
-        done = {r["id"]: r for r in map(json.loads, file.read_text().splitlines()) if r["cells"] == args.cells}
-    todo = [(s, args.seed + 1000 * i) for i, s in enumerate(specs) if s["id"] not in done]
-    print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
-    from joblib import Parallel, delayed
+    command = "python scripts/gap_validation.py " + " ".join(sys.argv[1:] if argv is None else argv)
+    if args.next_experiment:
+        file = next_experiment_phase(results, key, args.cells, args.jobs, args.added_as)
+        file.with_suffix(".command").write_text(command)
+    else:
+        counts = (8, 4, 4, 4) if args.reduced else (args.null, args.per_effect, args.pairs, args.ooc)
+        specs = scenarios(*counts)
+        file = results / f"{key}.jsonl"
+        done = _records(file, args.cells)
+        todo = [(s, args.seed + 1000 * i) for i, s in enumerate(specs) if s["id"] not in done]
+        print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
+        from joblib import Parallel, delayed
 
-    with file.open("a") as fh:
-        for record in Parallel(n_jobs=args.jobs, return_as="generator")(
-                delayed(run_twin)(s, args.cells, seed, variables) for s, seed in todo):
-            fh.write(json.dumps(record) + "\n")
-            fh.flush()
-            done[record["id"]] = record
-            print(f"{record['id']:<40} snr {record['snr']:7.1f}  {record['verdict']:<17} "
-                  f"{record['accepted']} cpu {record['cpu_s']:.0f}s", flush=True)
-    (results / f"{key}.command").write_text("python scripts/gap_validation.py " + " ".join(
-        sys.argv[1:] if argv is None else argv))
-    sets, commands = {}, []
+        with file.open("a") as fh:
+            for record in Parallel(n_jobs=args.jobs, return_as="generator")(
+                    delayed(run_twin)(s, args.cells, seed, variables) for s, seed in todo):
+                fh.write(json.dumps(record) + "\n")
+                fh.flush()
+                print(f"{record['id']:<40} snr {record['snr']:7.1f}  {record['verdict']:<17} "
+                      f"{record['accepted']} cpu {record['cpu_s']:.0f}s", flush=True)
+        (results / f"{key}.command").write_text(command)
+    sets, lifts, commands = {}, {}, []
     for name, (title, _) in SETS.items():
-        if (results / f"{name}.jsonl").exists():
-            records = [json.loads(line) for line in (results / f"{name}.jsonl").read_text().splitlines()]
-            sets[title] = [r for r in records if r["cells"] == args.cells]
-            commands.append((results / f"{name}.command").read_text() if (results / f"{name}.command").exists()
-                            else name)
+        paths = {None: results / f"{name}.jsonl"} | {r: next_experiment_file(results, name, r) for r in ADDED_AS}
+        for role, path in paths.items():
+            if path.exists():
+                found = list(_records(path, args.cells).values())
+                if role is None:
+                    sets[title] = found
+                else:
+                    lifts.setdefault(title, {})[role] = found
+                command_file = path.with_suffix(".command")
+                commands.append(command_file.read_text() if command_file.exists() else path.stem)
     out = Path(args.out)
-    write_report(sets, out, commands)
+    write_report({t: r for t, r in sets.items() if r}, out, commands, lifts)
     print(f"wrote {out} and {out.with_suffix('.json')}")
     return 0
 
