@@ -38,6 +38,7 @@ results substituted, predicted against realised decision accuracy), partial resu
     python scripts/gap_validation.py --reduced --jobs 2                                            # ~15 min CPU
     python scripts/gap_validation.py --reduced --effluent --jobs 2      # with effluent concentrations
     python scripts/gap_validation.py --next-experiment --jobs 2       # the second phase on the dp_oil results
+    python scripts/gap_validation.py --report-only --results DIR --out FILE   # the report of a study stopped part-way
 """
 
 from __future__ import annotations
@@ -735,6 +736,9 @@ def main(argv=None) -> int:
                         "coreflood and diagnose again (run_next_experiment); the twin counts are not used")
     p.add_argument("--added-as", choices=ADDED_AS, default="calibration",
                    help="with --next-experiment: the added coreflood as calibration (default) or held-out data")
+    p.add_argument("--report-only", action="store_true",
+                   help="run no twin: rebuild the report from the finished twins in --results (e.g. of a study "
+                        "stopped part-way; the report gives the count of each scenario)")
     p.add_argument("--cells", type=int, default=30)
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--seed", type=int, default=20260101)
@@ -747,7 +751,9 @@ def main(argv=None) -> int:
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     command = "python scripts/gap_validation.py " + " ".join(sys.argv[1:] if argv is None else argv)
-    if args.next_experiment:
+    if args.report_only:
+        pass
+    elif args.next_experiment:
         file = next_experiment_phase(results, key, args.cells, args.jobs, args.added_as)
         file.with_suffix(".command").write_text(command)
     else:
