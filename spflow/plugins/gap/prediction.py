@@ -65,6 +65,9 @@ class Predictor:
         self._runs: dict[tuple, xr.Dataset | None] = {}
         self._series: dict[tuple, np.ndarray] = {}
         self.runs = 0
+        #: the phase of the diagnosis that new forward runs are charged to (``runs_by_phase``)
+        self.phase = "other"
+        self.runs_by_phase: dict[str, int] = {}
 
     def model(self, u: np.ndarray, strengths: Mapping[str, float] | None = None):
         """(forward-model params, effect strengths) of unit-box point ``u`` with ``strengths`` over the base."""
@@ -102,6 +105,7 @@ class Predictor:
                 results = [measured_run(e, p, s, *numerics) for e, p, s in args]
             self._runs.update(zip(todo, results))
             self.runs += len(args)
+            self.runs_by_phase[self.phase] = self.runs_by_phase.get(self.phase, 0) + len(args)
         out = []
         for params, effects in models:
             series = {}
