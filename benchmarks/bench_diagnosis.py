@@ -104,14 +104,18 @@ def run(case: str, cells: int, economy: bool, parallel) -> dict:
 
 
 def _table(rows: list[dict]) -> list[str]:
+    """Markdown table: per run, forward runs (and their CPU s per run) of every phase, totals, verdict."""
     phases = [p for p in PHASES if any(p in r["cost"] for r in rows)]
-    head = ["case", "cells", "mode"] + [f"{p} runs" for p in phases] + ["runs", "wall s", "CPU s", "verdict"]
+    head = ["case", "cells", "mode"] + phases + ["runs", "run CPU s", "wall s", "CPU s", "verdict"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         cells = [r["case"], str(r["cells"]), r["mode"]]
-        cells += [f"{r['cost'].get(p, (0, 0.0))[0]}" for p in phases]
-        cells += [str(r["runs"]), f"{r['wall']:.0f}", f"{r['cpu']:.0f}",
-                  f"{r['verdict']} {r['ambiguity']}"]
+        for p in phases:
+            c = r["cost"].get(p)
+            cells.append("-" if c is None else f"{c.runs} ({c.run_cpu_s / c.runs:.2f} s)" if c.runs
+                         else f"0 ({c.own_cpu_s:.0f} s own)")
+        cells += [str(r["runs"]), f"{sum(c.run_cpu_s for c in r['cost'].values()):.0f}", f"{r['wall']:.0f}",
+                  f"{r['cpu']:.0f}", f"{r['verdict']} {r['ambiguity']}"]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
 
@@ -137,7 +141,8 @@ def main() -> None:
         for mode in args.modes.split(","):
             r = run(case, cells, mode == "after", parallel)
             rows.append(r)
-            phases = ", ".join(f"{p} {n} runs {s:.0f} s" for p, (n, s) in r["cost"].items())
+            phases = ", ".join(f"{p} {c.runs} runs ({c.run_cpu_s:.1f} CPU s) + {c.own_cpu_s:.1f} CPU s own, "
+                               f"{c.wall_s:.0f} s wall" for p, c in r["cost"].items())
             print(f"{case} {mode}: {r['runs']} runs, wall {r['wall']:.0f} s, CPU {r['cpu']:.0f} s; {phases}; "
                   f"verdict {r['verdict']} {r['ambiguity']}, strengths {r['strengths']}", flush=True)
     print(f"\nload average {os.getloadavg()[0]:.1f} (2 cores shared with other jobs), jobs {args.jobs}")

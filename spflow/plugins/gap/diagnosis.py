@@ -37,7 +37,7 @@ from spflow.core.errors import ParameterError
 from .base_calibration import calibrate_base
 from .base_model import BaseModel
 from .candidates import fingerprint_columns, refit, shortlist
-from .cost import CostLedger
+from .cost import Cost, CostLedger
 from .catalogue import CandidateEffect, candidates_for
 from .discrepancy import Discrepancy, fit_discrepancy
 from .change_points import ChangePoint, change_points
@@ -160,7 +160,7 @@ class GapDiagnosis:
     search_runs: int = 0
     tried: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
-    cost: dict[str, tuple[int, float]] = field(default_factory=dict)
+    cost: dict[str, Cost] = field(default_factory=dict)
 
     @property
     def dof(self) -> int:
@@ -275,7 +275,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     if options.numerical_variants:
         ledger.enter("numerical error")
         numerical = numerical_spread(predictor, base_fit, options.numerical_variants, options.numerical_window)
-        ledger.add_runs("numerical error", numerical.runs)
+        ledger.add_runs("numerical error", numerical.runs, numerical.run_cpu)
         layout_fit, layout_held, layout_all = (inflate(x, numerical.series)
                                                for x in (layout_fit, layout_held, layout_all))
         say(f"numerical error of the base model ({'; '.join(numerical.variants)}) added to the error model: "
