@@ -269,7 +269,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     say(f"calibrating the base model on {', '.join(e.name for e in cal)} ({layout_fit.size} points)")
     base_fit = calibrate_base(predictor, layout_fit, starts=options.starts, seed=options.seed,
                               max_nfev=options.max_nfev, diff_step=options.diff_step,
-                              parameter_sets=parameter_sets, polish=polish)
+                              parameter_sets=parameter_sets, polish=polish, economy=options.economy)
     chi2_measurement = base_fit.chi2
     numerical = None
     if options.numerical_variants:
