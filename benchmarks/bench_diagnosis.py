@@ -3,8 +3,9 @@
     python benchmarks/bench_diagnosis.py --jobs 2            # 100 cells: the bundled data and a twin pair
     python benchmarks/bench_diagnosis.py --quick --jobs 2    # 60 cells (smoke run)
 
-Two cases, each diagnosed twice in the same process -- with the cost reductions off (``Options(economy=False)``,
-the behaviour before them) and on -- so the table shows before and after side by side:
+Two cases, each diagnosed twice in the same process -- with the cost reductions of the least-squares fits off
+(``Options(economy=False)``, the behaviour before them) and on -- so the table shows before and after side by side
+(the reuse of the input-correlation null draws, which saves main-process CPU only, is on in both):
 
 * ``bundled`` -- the ``gap_diagnosis`` pipeline's diagnosis of the bundled study (BCF1 + BCF2 calibrate, BCF3
   held out, the nine Table 3.2 parameters, every catalogue effect a candidate), default options;
@@ -12,8 +13,8 @@ the behaviour before them) and on -- so the table shows before and after side by
   BCF2 is held out, both made by ``spflow.synthetic.make_coreflood`` (default lab noise, seeds 5 and 6) on the
   simulator's grid from the Table 3.2 defaults with polymer adsorption doubled (withheld from the base model).
 
-Per run it prints the forward runs and wall seconds of every phase of the diagnosis
-(:mod:`spflow.plugins.gap.cost`), the total wall and CPU seconds (this process plus its joblib workers, read from
+Per run it prints the forward runs, their CPU seconds, the diagnosing process's own CPU seconds and the wall
+seconds of every phase of the diagnosis (:mod:`spflow.plugins.gap.cost`), the total wall and CPU seconds (this process plus its joblib workers, read from
 ``/proc``: on a machine shared with other jobs the wall time grows with the load, the CPU time hardly; the load
 average is printed with the table), and the verdict, ambiguity set and fitted strengths -- which must be the same
 before and after (the script says so, or names the difference).
