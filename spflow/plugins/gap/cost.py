@@ -30,7 +30,7 @@ class Cost(NamedTuple):
 
 
 class CostLedger:
-    """Forward runs and wall time per phase of one diagnosis on ``predictor``."""
+    """Forward runs, CPU and wall time per phase of one diagnosis on ``predictor``."""
 
     def __init__(self, predictor: Predictor):
         self.predictor = predictor
