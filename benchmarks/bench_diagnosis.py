@@ -3,9 +3,8 @@
     python benchmarks/bench_diagnosis.py --jobs 2            # 100 cells: the bundled data and a twin pair
     python benchmarks/bench_diagnosis.py --quick --jobs 2    # 60 cells (smoke run)
 
-Two cases, each diagnosed twice in the same process -- with the cost reductions of the least-squares fits off
-(``Options(economy=False)``, the behaviour before them) and on -- so the table shows before and after side by side
-(the reuse of the input-correlation null draws, which saves main-process CPU only, is on in both):
+Two cases, each diagnosed twice in the same process -- with the cost reductions off (``Options(economy=False)``,
+the behaviour before them) and on -- so the table shows before and after side by side:
 
 * ``bundled`` -- the ``gap_diagnosis`` pipeline's diagnosis of the bundled study (BCF1 + BCF2 calibrate, BCF3
   held out, the nine Table 3.2 parameters, every catalogue effect a candidate), default options;

@@ -111,10 +111,10 @@ def test_rescanning_a_layout_equals_fresh_scans():
     lay = Layout(tuple(blocks))
     lags = np.arange(11) * STEP
     rng = np.random.default_rng(8)
-    for _ in range(3):   # the first call draws the nulls, the next two reuse them
+    for reuse in (True, True, False):   # the first call draws the nulls, the second reuses them, the third not
         w = rng.normal(size=lay.size) + 0.5 * np.concatenate([channel_series(e, "polymer_ppm", e.pv - 0.3) / 2500.0
                                                               for e in exps])
-        found = input_correlations(lay, w, exps, 0.01, 1.0, STEP, draws=3000, seed=5)
+        found = input_correlations(lay, w, exps, 0.01, 1.0, STEP, draws=3000, seed=5, reuse=reuse)
         fresh, expected = np.random.default_rng(5), {}
         for b, s, exp in zip(lay.blocks, lay.slices(), exps):
             for channel in ("salinity_ppm", "surfactant_ppm", "polymer_ppm"):

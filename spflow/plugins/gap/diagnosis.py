@@ -86,7 +86,8 @@ class Options:
     numerical_window: int = 3
     discrepancy_degree: int = 2
     subset_pool: int = 4
-    #: exact cost reductions on (same results, fewer forward runs; ``False``: the behaviour before, for benchmarks)
+    #: exact cost reductions on (same results, fewer forward runs and less CPU; ``False``: the behaviour before,
+    #: for benchmarks)
     economy: bool = True
 
 
@@ -200,7 +201,7 @@ def _view(fitted, predictor, layout, experiments, options, rng) -> ModelView:
     cps = change_points(layout, w, e, slug_names, options.alpha, options.min_segment, options.null_draws,
                         options.seed)
     xcorr = input_correlations(layout, w, experiments, options.alpha, options.max_lag, options.pv_step,
-                               options.null_draws, options.seed)
+                               options.null_draws, options.seed, reuse=options.economy)
     return ModelView(fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs, cps, xcorr)
 
 

@@ -153,9 +153,11 @@ class InputCorrelation:
 
 
 def input_correlations(layout: Layout, whitened: np.ndarray, experiments: list[Experiment], alpha: float,
-                       max_lag: float, pv_step: float, draws: int = 20000, seed: int = 0) -> list[InputCorrelation]:
+                       max_lag: float, pv_step: float, draws: int = 20000, seed: int = 0, reuse: bool = True,
+                       ) -> list[InputCorrelation]:
     """Lag scans of every testable (block, channel) of ``layout``, flagged at Bonferroni level ``alpha`` over all of
-    them; most significant (then largest statistic) first."""
+    them; most significant (then largest statistic) first. ``reuse``: take the null draws of an earlier scan of the
+    same layout (same results, less CPU); ``False`` draws them afresh and keeps nothing."""
     if not max_lag >= 0.0:
         raise ParameterError(f"max_lag = {max_lag!r} PV is out of range; allowed [0, inf)")
     lags = np.arange(int(np.floor(max_lag / pv_step + 1e-9)) + 1) * pv_step
@@ -174,14 +176,18 @@ def input_correlations(layout: Layout, whitened: np.ndarray, experiments: list[E
         digest.update(r.u.tobytes())
         digest.update(r.c.tobytes())
     key = digest.digest()
-    if key not in _NULLS:
+    if reuse and key in _NULLS:
+        nulls = _NULLS[key]
+    else:
         rng = np.random.default_rng(seed)
-        _NULLS[key] = [r.null(draws, rng) for *_, r in tests]
-        while len(_NULLS) > _NULLS_KEPT:
-            _NULLS.popitem(last=False)
+        nulls = [r.null(draws, rng) for *_, r in tests]
+        if reuse:
+            _NULLS[key] = nulls
+            while len(_NULLS) > _NULLS_KEPT:
+                _NULLS.popitem(last=False)
     out = [InputCorrelation(block.variable, block.experiment, channel, lags, *_scan(whitened[s], r, null),
                             float(np.ptp(x)))
-           for (block, s, channel, x, r), null in zip(tests, _NULLS[key])]
+           for (block, s, channel, x, r), null in zip(tests, nulls)]
     level = alpha / max(len(out), 1)
     out = [InputCorrelation(c.variable, c.experiment, c.channel, c.lags, c.z, c.beta, c.pvalue, c.channel_range,
                             c.pvalue < level) for c in out]
