@@ -1,6 +1,7 @@
 """Residual/input cross-correlation: the lag scan against an explicit-covariance GLS regression, a known lagged
-dependence found at its lag with its size, constant channels left out, and AR(1) noise flagged at the nominal rate
-over many seeds (while a test that ignores the AR(1) model is not)."""
+dependence found at its lag with its size, constant channels left out, the null draws reused for a layout scanned
+again (results equal to fresh scans), and AR(1) noise flagged at the nominal rate over many seeds (while a test that
+ignores the AR(1) model is not)."""
 
 import numpy as np
 import pytest
@@ -95,6 +96,38 @@ def test_constant_channels_are_left_out():
                     np.random.default_rng(0)) is None
     with pytest.raises(ParameterError, match="max_lag"):
         input_correlations(Layout((block,)), np.zeros(exp.pv.size), [exp], 0.01, -1.0, STEP)
+
+
+def test_rescanning_a_layout_equals_fresh_scans():
+    """A diagnosis scans one layout for its base and its final model: the second scan reuses the null draws of the
+    first; both equal scan-by-scan lag scans drawing their nulls in order from a fresh generator (module
+    docstring), whatever the residuals."""
+    exps = [experiment("BCF1"), experiment("BCF2")]
+    blocks = []
+    for k, exp in enumerate(exps):
+        noise = BlockErrorModel(np.full(exp.pv.size, 1.0 + k), 0.5)
+        blocks.append(Block("dp", exp.name, np.arange(exp.pv.size), exp.pv, np.zeros(exp.pv.size),
+                            exp.slug_index(exp.pv), noise))
+    lay = Layout(tuple(blocks))
+    lags = np.arange(11) * STEP
+    rng = np.random.default_rng(8)
+    for reuse in (True, True, False):   # the first call draws the nulls, the second reuses them, the third not
+        w = rng.normal(size=lay.size) + 0.5 * np.concatenate([channel_series(e, "polymer_ppm", e.pv - 0.3) / 2500.0
+                                                              for e in exps])
+        found = input_correlations(lay, w, exps, 0.01, 1.0, STEP, draws=3000, seed=5, reuse=reuse)
+        fresh, expected = np.random.default_rng(5), {}
+        for b, s, exp in zip(lay.blocks, lay.slices(), exps):
+            for channel in ("salinity_ppm", "surfactant_ppm", "polymer_ppm"):
+                scan = lag_scan(w[s], b.noise, lagged(exp, channel, b.pv, lags), 3000, fresh)
+                if scan is not None:
+                    expected[(b.experiment, channel)] = scan
+        assert {(c.experiment, c.channel) for c in found} == set(expected)
+        for c in found:
+            z, beta, p = expected[(c.experiment, c.channel)]
+            np.testing.assert_array_equal(c.z, z)
+            np.testing.assert_array_equal(c.beta, beta)
+            assert c.pvalue == p
+        assert len({c.pvalue for c in found}) > 1
 
 
 def test_ar1_noise_is_flagged_at_the_nominal_rate():

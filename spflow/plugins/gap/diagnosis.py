@@ -37,6 +37,7 @@ from spflow.core.errors import ParameterError
 from .base_calibration import calibrate_base
 from .base_model import BaseModel
 from .candidates import fingerprint_columns, refit, shortlist
+from .cost import Cost, CostLedger
 from .catalogue import CandidateEffect, candidates_for
 from .discrepancy import Discrepancy, fit_discrepancy
 from .change_points import ChangePoint, change_points
@@ -85,6 +86,9 @@ class Options:
     numerical_window: int = 3
     discrepancy_degree: int = 2
     subset_pool: int = 4
+    #: exact cost reductions on (same results, fewer forward runs and less CPU; ``False``: the behaviour before,
+    #: for benchmarks)
+    economy: bool = True
 
 
 @dataclass
@@ -157,6 +161,7 @@ class GapDiagnosis:
     search_runs: int = 0
     tried: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    cost: dict[str, Cost] = field(default_factory=dict)
 
     @property
     def dof(self) -> int:
@@ -196,7 +201,7 @@ def _view(fitted, predictor, layout, experiments, options, rng) -> ModelView:
     cps = change_points(layout, w, e, slug_names, options.alpha, options.min_segment, options.null_draws,
                         options.seed)
     xcorr = input_correlations(layout, w, experiments, options.alpha, options.max_lag, options.pv_step,
-                               options.null_draws, options.seed)
+                               options.null_draws, options.seed, reuse=options.economy)
     return ModelView(fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs, cps, xcorr)
 
 
@@ -244,6 +249,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         raise ParameterError(f"experiments {clash} are both calibration and held-out data")
     candidates = candidates_for(catalogue, base.effects)
     predictor = Predictor(base, cal + held, parallel)
+    ledger = CostLedger(predictor)
     layout_fit = make_layout(cal, options.variables)
     missing = sorted(set(options.variables) - {b.variable for b in layout_fit.blocks})
     if missing:
@@ -260,18 +266,22 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     kind = "heldout" if layout_held.size else "leave_one_slug_out"
     slug_names = _slug_names(cal + held)
 
+    ledger.enter("base calibration")
     say(f"calibrating the base model on {', '.join(e.name for e in cal)} ({layout_fit.size} points)")
     base_fit = calibrate_base(predictor, layout_fit, starts=options.starts, seed=options.seed,
                               max_nfev=options.max_nfev, diff_step=options.diff_step,
-                              parameter_sets=parameter_sets, polish=polish)
+                              parameter_sets=parameter_sets, polish=polish, economy=options.economy)
     chi2_measurement = base_fit.chi2
     numerical = None
     if options.numerical_variants:
+        ledger.enter("numerical error")
         numerical = numerical_spread(predictor, base_fit, options.numerical_variants, options.numerical_window)
+        ledger.add_runs("numerical error", numerical.runs, numerical.run_cpu)
         layout_fit, layout_held, layout_all = (inflate(x, numerical.series)
                                                for x in (layout_fit, layout_held, layout_all))
         say(f"numerical error of the base model ({'; '.join(numerical.variants)}) added to the error model: "
             f"chi2 {chi2_measurement:.1f} with measurement error only")
+        ledger.enter("base calibration")
         base_fit = _recalibrate(predictor, layout_fit, base_fit, options, polish or parameter_sets is None)
     layout_score = layout_held if layout_held.size else layout_fit
     dof = layout_fit.size - len(base.parameters)
@@ -279,11 +289,16 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     say(f"base chi2 = {base_fit.chi2:.1f} on {dof} dof (p = {pvalue:.3g}); {predictor.runs} forward runs")
 
     def out_of_sample(f: Fit) -> Predictive:
+        left = ledger.enter("scores")
         if layout_held.size:
-            return predictive(predictor, layout_held, f, options.nuisance_scale, options.diff_step)
-        return leave_one_slug_out(predictor, layout_fit, f, tau=options.nuisance_scale, max_nfev=options.loso_nfev,
-                                  diff_step=options.diff_step)
+            w = predictive(predictor, layout_held, f, options.nuisance_scale, options.diff_step)
+        else:
+            w = leave_one_slug_out(predictor, layout_fit, f, tau=options.nuisance_scale, max_nfev=options.loso_nfev,
+                                   diff_step=options.diff_step)
+        ledger.enter(left)
+        return w
 
+    ledger.enter("scores")
     w_base = out_of_sample(base_fit)
     # the generic-discrepancy competitor: fitted on the calibration data, its transferable part predicts held-out
     y_base = layout_fit.vector(predictor.predict([base_fit.point], layout_fit.experiments, layout_fit.variables)[0])
@@ -314,17 +329,19 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     steps: list[Step] = []
     accepted: list[list[str]] = []
     while remaining and len(fitting.candidates) < options.max_effects:
+        ledger.enter("screening")
         cols = fingerprint_columns(predictor, layout_fit, fitting, remaining)
         result = screen([c.name for c in remaining], [c.levels for c in remaining], cols, -fitting.residual,
                         NuisanceProjector(fitting.jacobian, options.nuisance_scale))
         chosen = shortlist(result, options.shortlist, options.cos_threshold)
         step = Step(_label(fitting), _label(reference), result, [remaining[i].name for i in chosen], {}, {}, {})
         loo_ref = psis_loo(reference, options.nuisance_scale, options.loo_draws, options.seed)
+        ledger.enter("refits")
         for i in chosen:
             c = remaining[i]
             say(f"refitting {_label(fitting)}+{c.name} (screen z = {result.best_z()[i]:.2f})")
             f = refit(predictor, layout_fit, fitting, c, base_fit.start[: base_fit.n_params],
-                      max_nfev=options.max_nfev, diff_step=options.diff_step)
+                      max_nfev=options.max_nfev, diff_step=options.diff_step, economy=options.economy)
             w = out_of_sample(f)
             strengths = f.strengths
             physical = all(x.is_physical(strengths[x.name]) for x in f.candidates if x.name not in
@@ -375,6 +392,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         outs: dict[tuple[str, ...], Predictive] = {(): w_base}
         outs.update({(n,): w for n, w in first.out_of_sample.items()})
         before = predictor.runs
+        ledger.enter("subsets")
 
         def evaluate(names: tuple[str, ...]) -> SubsetFit:
             if names not in fits:
@@ -388,7 +406,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         break
                 say(f"joint refit base+{'+'.join(names)}")
                 fits[names] = fit(predictor, layout_fit, starts, effects, max_nfev=options.max_nfev,
-                                  diff_step=options.diff_step)
+                                  diff_step=options.diff_step, economy=options.economy)
             f = fits[names]
             if names not in outs:
                 outs[names] = out_of_sample(f)
@@ -422,6 +440,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
 
     rng = np.random.default_rng(options.seed)
     everything = cal + held
+    ledger.enter("views")
     base_view = _view(base_fit, predictor, layout_all, everything, options, rng)
     final_view = base_view if reference is base_fit else _view(reference, predictor, layout_all, everything, options,
                                                                 rng)
@@ -431,4 +450,4 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         _label(reference), w_base, w_ref, base_view, final_view,
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
                         time.perf_counter() - start, runs, chi2_measurement, numerical, disc, w_disc, search, pool,
-                        search_runs, tried, notes)
+                        search_runs, tried, notes, ledger.table())

@@ -33,6 +33,8 @@ goes with the channel's step.
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,11 +66,29 @@ def lagged(exp: Experiment, channel: str, pv: np.ndarray, lags: np.ndarray) -> n
     return np.stack([channel_series(exp, channel, np.asarray(pv) - lag) for lag in lags], axis=1)
 
 
-def lag_scan(w: np.ndarray, noise: BlockErrorModel, x: np.ndarray, draws: int, rng: np.random.Generator,
-             ) -> tuple[np.ndarray, np.ndarray, float] | None:
-    """(z_l, beta_l, p-value of max |z_l|) of whitened residuals ``w`` against the lagged channel columns ``x``
-    (n, L) under the AR(1) error model ``noise`` (module docstring); None when no lag varies over the block."""
-    ones = noise.whiten(np.ones(w.size))
+@dataclass(frozen=True)
+class _Regressors:
+    """The whitened lagged channel of one block: unit columns ``u`` (n, lags that vary) orthogonal to the whitened
+    intercept, the unit intercept ``c``, which lags vary (``ok``) and the columns' norms before scaling."""
+
+    u: np.ndarray
+    c: np.ndarray
+    ok: np.ndarray
+    norm: np.ndarray
+
+    def scan(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """z (lags, ...) and the raw projections of residual columns ``v`` (n, ...)."""
+        proj = np.tensordot(self.u, v, axes=(0, 0))
+        rss = np.sum(v * v, axis=0) - np.tensordot(self.c, v, axes=(0, 0)) ** 2 - proj**2
+        return proj / np.sqrt(np.maximum(rss / (self.c.size - 2), 1.0)), proj
+
+    def null(self, draws: int, rng: np.random.Generator) -> np.ndarray:
+        """Monte Carlo draws of max |z| for iid N(0, 1) residuals."""
+        return np.abs(self.scan(rng.standard_normal((self.c.size, draws)))[0]).max(axis=0)
+
+
+def _regressors(noise: BlockErrorModel, x: np.ndarray) -> _Regressors | None:
+    ones = noise.whiten(np.ones(x.shape[0]))
     a = noise.whiten(np.asarray(x, dtype=float))
     a = a - np.outer(ones, ones @ a) / (ones @ ones)
     norm = np.linalg.norm(a, axis=0)
@@ -76,21 +96,28 @@ def lag_scan(w: np.ndarray, noise: BlockErrorModel, x: np.ndarray, draws: int, r
     ok = norm > _RELATIVE_TOL * np.maximum(scale, 1e-300)
     if not ok.any():
         return None
-    u = a[:, ok] / norm[ok]
-    c = ones / np.linalg.norm(ones)
-    n = w.size
+    return _Regressors(a[:, ok] / norm[ok], ones / np.linalg.norm(ones), ok, norm)
 
-    def scan(v):  # z (lags, ...) and the raw projections of residual columns v (n, ...)
-        proj = np.tensordot(u, v, axes=(0, 0))
-        rss = np.sum(v * v, axis=0) - np.tensordot(c, v, axes=(0, 0)) ** 2 - proj**2
-        return proj / np.sqrt(np.maximum(rss / (n - 2), 1.0)), proj
 
-    z, beta = np.full(x.shape[1], np.nan), np.full(x.shape[1], np.nan)
-    z[ok], proj = scan(w)
-    beta[ok] = proj / norm[ok]
-    stat = float(np.max(np.abs(z[ok])))
-    null = np.abs(scan(rng.standard_normal((n, draws)))[0]).max(axis=0)
-    return z, beta, float((1 + np.sum(null >= stat)) / (draws + 1))
+def _scan(w: np.ndarray, r: _Regressors, null: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    z, beta = np.full(r.ok.size, np.nan), np.full(r.ok.size, np.nan)
+    z[r.ok], proj = r.scan(w)
+    beta[r.ok] = proj / r.norm[r.ok]
+    stat = float(np.max(np.abs(z[r.ok])))
+    return z, beta, float((1 + np.sum(null >= stat)) / (null.size + 1))
+
+
+def lag_scan(w: np.ndarray, noise: BlockErrorModel, x: np.ndarray, draws: int, rng: np.random.Generator,
+             ) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """(z_l, beta_l, p-value of max |z_l|) of whitened residuals ``w`` against the lagged channel columns ``x``
+    (n, L) under the AR(1) error model ``noise`` (module docstring); None when no lag varies over the block."""
+    r = _regressors(noise, x)
+    return None if r is None else _scan(w, r, r.null(draws, rng))
+
+
+#: null draws of the last few scanned layouts (a diagnosis scans the same layout for its base and final model)
+_NULLS: OrderedDict[bytes, list[np.ndarray]] = OrderedDict()
+_NULLS_KEPT = 2
 
 
 @dataclass(frozen=True)
@@ -126,23 +153,41 @@ class InputCorrelation:
 
 
 def input_correlations(layout: Layout, whitened: np.ndarray, experiments: list[Experiment], alpha: float,
-                       max_lag: float, pv_step: float, draws: int = 20000, seed: int = 0) -> list[InputCorrelation]:
+                       max_lag: float, pv_step: float, draws: int = 20000, seed: int = 0, reuse: bool = True,
+                       ) -> list[InputCorrelation]:
     """Lag scans of every testable (block, channel) of ``layout``, flagged at Bonferroni level ``alpha`` over all of
-    them; most significant (then largest statistic) first."""
+    them; most significant (then largest statistic) first. ``reuse``: take the null draws of an earlier scan of the
+    same layout (same results, less CPU); ``False`` draws them afresh and keeps nothing."""
     if not max_lag >= 0.0:
         raise ParameterError(f"max_lag = {max_lag!r} PV is out of range; allowed [0, inf)")
     lags = np.arange(int(np.floor(max_lag / pv_step + 1e-9)) + 1) * pv_step
-    rng = np.random.default_rng(seed)
     by_name = {e.name: e for e in experiments}
-    out = []
+    tests = []
     for block, s in zip(layout.blocks, layout.slices()):
-        exp = by_name[block.experiment]
         for channel in CHANNELS:
-            x = lagged(exp, channel, block.pv, lags)
-            scan = lag_scan(whitened[s], block.noise, x, draws, rng)
-            if scan is not None:
-                out.append(InputCorrelation(block.variable, block.experiment, channel, lags, *scan,
-                                            float(np.ptp(x))))
+            x = lagged(by_name[block.experiment], channel, block.pv, lags)
+            r = _regressors(block.noise, x)
+            if r is not None:
+                tests.append((block, s, channel, x, r))
+    # the null draws depend on the regressors, the seed and the number of draws only (not on the residuals):
+    # drawn in the same order as scan by scan, and reused when the same layout is scanned again
+    digest = hashlib.sha256(np.array([seed, draws], dtype=np.int64).tobytes())
+    for *_, r in tests:
+        digest.update(r.u.tobytes())
+        digest.update(r.c.tobytes())
+    key = digest.digest()
+    if reuse and key in _NULLS:
+        nulls = _NULLS[key]
+    else:
+        rng = np.random.default_rng(seed)
+        nulls = [r.null(draws, rng) for *_, r in tests]
+        if reuse:
+            _NULLS[key] = nulls
+            while len(_NULLS) > _NULLS_KEPT:
+                _NULLS.popitem(last=False)
+    out = [InputCorrelation(block.variable, block.experiment, channel, lags, *_scan(whitened[s], r, null),
+                            float(np.ptp(x)))
+           for (block, s, channel, x, r), null in zip(tests, nulls)]
     level = alpha / max(len(out), 1)
     out = [InputCorrelation(c.variable, c.experiment, c.channel, c.lags, c.z, c.beta, c.pvalue, c.channel_range,
                             c.pvalue < level) for c in out]

@@ -95,17 +95,47 @@ class WhitenedProblem:
         return np.column_stack([(f - f0) / steps[j] for j, f in enumerate(self.residuals(shifted))])
 
 
+def _without_last_jacobian(problem: WhitenedProblem, budget: int):
+    """(residuals, Jacobian) callables for ``least_squares(..., max_nfev=budget)`` that skip the forward runs of
+    the Jacobian at the point of the ``budget``-th residual evaluation, returning zeros instead.
+
+    Exact: trust-region reflective counts every residual evaluation (the start's included) and stops as soon as
+    the count reaches ``max_nfev``; a Jacobian requested after the ``budget``-th *distinct* evaluated point (at
+    most as many as scipy's count) is therefore the last one, used only for the gradient and Jacobian that scipy
+    reports with its result -- the iterate ``x`` and the residuals ``fun`` it returns do not depend on it. The
+    first, budgeted round of a multi-start fit keeps only those two (the best start's Jacobian is recomputed, from
+    memoised runs or new ones, when its full run begins there), so the skipped runs were never used."""
+    seen: set[bytes] = set()
+
+    def fun(z):
+        z = np.asarray(z, float)
+        seen.add(z.tobytes())
+        return problem.fun(z)
+
+    def jac(z):
+        if len(seen) >= budget:
+            return np.zeros((problem.layout.size, np.size(z)))
+        return problem.jac(z)
+
+    return fun, jac
+
+
 def fit(predictor: Predictor, layout: Layout, starts: Sequence[np.ndarray], candidates=(), *,
-        max_nfev: int = 30, diff_step: float = 0.01) -> Fit:
+        max_nfev: int = 30, diff_step: float = 0.01, economy: bool = True) -> Fit:
     """Least-squares fit from the best of ``starts`` (unit-box vectors of length p + len(candidates)).
 
     With several starts, each first runs a third of the budget; the best one then continues with the full
-    ``max_nfev`` (the memoised forward runs make the restart free)."""
+    ``max_nfev`` (the memoised forward runs make the restart free). ``economy`` skips the forward runs of the
+    Jacobians at the end of the first round (:func:`_without_last_jacobian`: same result, fewer runs); ``False``
+    computes them (the behaviour before, for benchmarks)."""
     n_params = len(predictor.base.parameters)
     problem = WhitenedProblem(predictor, layout, candidates, n_params, diff_step)
 
-    def solve(z0, budget):
-        return least_squares(problem.fun, z0, jac=problem.jac, bounds=(0.0, 1.0), method="trf", x_scale=1.0,
+    def solve(z0, budget, last_jacobian=True):
+        fun, jac = problem.fun, problem.jac
+        if not last_jacobian:
+            fun, jac = _without_last_jacobian(problem, budget)
+        return least_squares(fun, z0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale=1.0,
                              ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=budget)
 
     best, best_start = None, None
@@ -115,7 +145,7 @@ def fit(predictor: Predictor, layout: Layout, starts: Sequence[np.ndarray], cand
             raise SpflowError(f"start has {z0.size} coordinates, expected {n_params + len(problem.candidates)}")
         if np.all(problem.fun(z0) == _FAILED):
             continue
-        res = solve(z0, max(2, max_nfev // 3) if len(starts) > 1 else max_nfev)
+        res = solve(z0, max(2, max_nfev // 3), not economy) if len(starts) > 1 else solve(z0, max_nfev)
         if best is None or res.cost < best.cost:
             best, best_start = res, z0
     if best is None:

@@ -57,11 +57,12 @@ DEFAULT_VARIANTS = (Numerics(2, None), Numerics(2, "upwind"))
 @dataclass(frozen=True)
 class NumericalSpread:
     """Per (variable, experiment): the spread ``d`` on the experiment's grid (NaN where not predicted), the
-    variants' labels and the forward runs spent."""
+    variants' labels, the forward runs spent and their CPU seconds."""
 
     series: dict[tuple[str, str], np.ndarray]
     variants: list[str]
     runs: int
+    run_cpu: float = 0.0
 
     def rms(self, layout: Layout) -> dict[tuple[str, str], float]:
         """Root-mean-square spread of every block of ``layout`` (in the variable's units)."""
@@ -80,13 +81,14 @@ def numerical_spread(predictor: Predictor, fitted: Fit, variants: Sequence[Numer
     if reference is None:
         raise SpflowError("the forward run at the calibrated base point failed")
     spread: dict[tuple[str, str], np.ndarray] = {}
-    labels, runs = [], 0
+    labels, runs, cpu = [], 0, 0.0
     for v in variants:
         base = dataclasses.replace(predictor.base, cells=v.refine * predictor.base.cells,
                                    scheme=v.scheme or predictor.base.scheme)
         other = Predictor(base, list(predictor.experiments.values()), predictor.parallel)
         alt = other.predict(point, names)[0]
         runs += other.runs
+        cpu += other.run_cpu
         labels.append(v.label(predictor.base))
         if alt is None:
             raise SpflowError(f"the forward run of the calibrated base model with {v.label(predictor.base)} failed")
@@ -97,7 +99,7 @@ def numerical_spread(predictor: Predictor, fitted: Fit, variants: Sequence[Numer
                 spread[key] = d if key not in spread else np.fmax(spread[key], d)
     if window > 1:
         spread = {k: _widen(d, window) for k, d in spread.items()}
-    return NumericalSpread(spread, labels, runs)
+    return NumericalSpread(spread, labels, runs, cpu)
 
 
 def _widen(d: np.ndarray, window: int) -> np.ndarray:

@@ -14,6 +14,7 @@ for a set of experiments, in parallel through a joblib ``Parallel`` when given, 
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -50,6 +51,13 @@ def measured_run(exp: Experiment, params: Mapping[str, float], effects: Mapping[
                    empty_tubes="limit")
 
 
+def _timed_run(*args) -> tuple[xr.Dataset | None, float]:
+    """:func:`measured_run` and the CPU seconds it took (in the process that ran it)."""
+    start = time.process_time()
+    out = measured_run(*args)
+    return out, time.process_time() - start
+
+
 def _key(params: Mapping[str, float], effects: Mapping[str, float]) -> tuple:
     return (tuple(sorted((k, round(float(v), 12)) for k, v in params.items())),
             tuple(sorted((k, round(float(v), 12)) for k, v in effects.items())))
@@ -65,6 +73,12 @@ class Predictor:
         self._runs: dict[tuple, xr.Dataset | None] = {}
         self._series: dict[tuple, np.ndarray] = {}
         self.runs = 0
+        #: the phase of the diagnosis that new forward runs are charged to (``runs_by_phase``)
+        self.phase = "other"
+        self.runs_by_phase: dict[str, int] = {}
+        #: CPU seconds of the forward runs (in the processes that ran them), in all and per phase
+        self.run_cpu = 0.0
+        self.run_cpu_by_phase: dict[str, float] = {}
 
     def model(self, u: np.ndarray, strengths: Mapping[str, float] | None = None):
         """(forward-model params, effect strengths) of unit-box point ``u`` with ``strengths`` over the base."""
@@ -97,11 +111,15 @@ class Predictor:
             if self.parallel is not None and len(args) > 1:
                 from joblib import delayed
 
-                results = self.parallel(delayed(measured_run)(e, p, s, *numerics) for e, p, s in args)
+                timed = self.parallel(delayed(_timed_run)(e, p, s, *numerics) for e, p, s in args)
             else:
-                results = [measured_run(e, p, s, *numerics) for e, p, s in args]
-            self._runs.update(zip(todo, results))
+                timed = [_timed_run(e, p, s, *numerics) for e, p, s in args]
+            self._runs.update(zip(todo, (result for result, _ in timed)))
+            cpu = sum(seconds for _, seconds in timed)
             self.runs += len(args)
+            self.run_cpu += cpu
+            self.runs_by_phase[self.phase] = self.runs_by_phase.get(self.phase, 0) + len(args)
+            self.run_cpu_by_phase[self.phase] = self.run_cpu_by_phase.get(self.phase, 0.0) + cpu
         out = []
         for params, effects in models:
             series = {}
