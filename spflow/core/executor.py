@@ -26,6 +26,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
@@ -147,11 +148,27 @@ def _selected(pipeline: Pipeline, until: Iterable[str] | str | None, only: Itera
     return set(pipeline.nodes)
 
 
-def _execute(stage: Stage, ctx: StageContext, inputs: dict[str, xr.Dataset]) -> tuple[xr.Dataset, float]:
-    """Run one stage (wherever the runner put it) and return its output and wall time."""
+def _execute(stage: Stage, ctx: StageContext, inputs: dict[str, xr.Dataset],
+             origin_pid: int) -> tuple[xr.Dataset, float, list]:
+    """Run one stage (wherever the runner put it) and return its output, wall time and, when it ran in another
+    process than ``origin_pid`` (the run's), the warnings it raised as ``(category, message, filename, lineno)``: a
+    worker process's warnings would otherwise never reach the user; :func:`_reemit` raises them again in the run's
+    process. In the run's own process (sequential and thread runners) warnings go out as they happen
+    (``warnings.catch_warnings`` is not thread-safe)."""
     t0 = time.perf_counter()
-    out = stage.run(ctx, **inputs)
-    return out, time.perf_counter() - t0
+    if os.getpid() == origin_pid:
+        return stage.run(ctx, **inputs), time.perf_counter() - t0, []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = stage.run(ctx, **inputs)
+    seen = list(dict.fromkeys((w.category, str(w.message), w.filename, w.lineno) for w in caught))
+    return out, time.perf_counter() - t0, seen
+
+
+def _reemit(caught: list) -> None:
+    """Raise the warnings a stage raised (once each, where it raised them) under this process's warning filters."""
+    for category, message, filename, lineno in caught:
+        warnings.warn_explicit(message, category, filename, lineno)
 
 
 def run(pipeline: Pipeline, *, cache: str | Path = ".spflow", jobs: int = 1, backend: str | Runner = "loky",
@@ -316,14 +333,14 @@ class _NodeOps:
         ctx = StageContext(name, n_jobs=n_jobs, backend=self.runner.inner_backend, verbose=self.verbose,
                            report=self.workers.report)
         self.notify("spflow_node_start", node=name, stage=stage, cached=False)
-        return self.workers.submit(_execute, stage, ctx, inputs)
+        return self.workers.submit(_execute, stage, ctx, inputs, os.getpid())
 
     def land(self, name: str, future: Future) -> None:
         """Check and store a finished node's output (the moment it arrives: a later failure loses nothing)."""
         stage = self.plan.stages[name]
         try:
             try:
-                out, seconds = future.result()
+                out, seconds, caught = future.result()
             except Exception as exc:
                 raise StageError(name, stage.name, f"{type(exc).__name__}: {exc}") from exc
             if not isinstance(out, xr.Dataset):
@@ -340,6 +357,7 @@ class _NodeOps:
         self.memory[name] = out
         self.result.executed.append(name)
         self.notify("spflow_node_end", node=name, stage=stage, seconds=seconds, cached=False)
+        _reemit(caught)  # after the output is stored: a warning turned into an error loses nothing
 
 
 def _entry_problem(store: Store, key: str, stage: Stage) -> str | None:
