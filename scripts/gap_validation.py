@@ -20,7 +20,7 @@ effect response at the true parameters (Jacobian there, :mod:`spflow.plugins.gap
 
 Results accumulate in JSON-lines files (``out/gap_validation/{dp_oil,effluent}.jsonl``; re-running skips finished
 twins, so a long study can be stopped and resumed); the report (``docs/gap_validation.md`` + ``.json`` and
-``docs/figures/gap_power_*.png``) is rebuilt from all results.
+``docs/figures/<report name>_power_*.png``) is rebuilt from all results.
 
 **Second phase: the proposed next experiment** (``--next-experiment``, issue 20). For every finished twin whose
 diagnosis is ambiguous (its final ambiguity set holds two or more candidates, :func:`is_ambiguous`) the twin is
@@ -649,7 +649,7 @@ def write_report(sets: dict[str, list[dict]], md: Path, commands: list[str],
                           "projected-fingerprint "
                           "SNR >= 3).", ""]
     for k, (title, records) in enumerate(sets.items()):
-        section, payload[title] = _section(records, md.parent / "figures" / f"gap_power_{k}.png", md)
+        section, payload[title] = _section(records, md.parent / "figures" / f"{md.stem}_power_{k}.png", md)
         lines += [f"## {title}", ""] + section
         for role, phase in lifts.get(title, {}).items():
             section, payload[title][f"next_experiment_{role}"] = _lift_section(records, phase, role)
