@@ -4,7 +4,10 @@ A pipeline module's ``report(result, outdir)`` writes figures into ``outdir`` an
 a list of lines (one section holding every PNG of ``outdir``), or a mapping ``{sub-directory: lines}`` (one section
 per sub-directory of ``outdir`` with the PNGs found there). :func:`write_html_report` turns that into
 ``outdir/report.html`` -- figures inlined as base64 PNG, so the file can be mailed or archived alone -- ending with
-the table of every node: stage, version, parameters, provenance key, whether it ran or came from the cache, seconds.
+the table of every node: stage, version, parameters, provenance key, whether it ran or came from the cache, seconds,
+and the versions of spflow, Python and the libraries its results depend on. Long lines wrap (nothing is cut off), and
+every warning line of a section (``WARNING ...``, or a line saying the data reject the model) is repeated as a
+highlighted paragraph above its text.
 """
 
 from __future__ import annotations
@@ -18,12 +21,18 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["Section", "sections_from", "provenance_rows", "write_html_report"]
+__all__ = ["Section", "sections_from", "provenance_rows", "software_versions", "write_html_report"]
+
+#: The distributions whose versions a report records (spflow's dependencies that shape its results).
+_SOFTWARE = ("spflow", "numpy", "scipy", "xarray", "netCDF4", "pluggy", "networkx", "joblib", "numba", "chaospy",
+             "SALib", "scikit-learn", "GPy", "pymoo", "moocore", "emcee", "arviz", "matplotlib")
+_WARNING = re.compile(r"^\s*WARNING\b|data reject the model|the data reject", re.IGNORECASE)
 
 _CSS = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
 h1 { border-bottom: 2px solid #446; } h2 { margin-top: 2em; border-bottom: 1px solid #aab; }
-pre { background: #f6f6f9; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
+pre { background: #f6f6f9; padding: 0.8em; font-size: 0.85em; white-space: pre-wrap; overflow-wrap: anywhere; }
+p.warning { background: #fff3cd; border-left: 4px solid #c90; padding: 0.5em 0.8em; }
 figure { margin: 1.5em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 0.9em; color: #555; }
 table { border-collapse: collapse; font-size: 0.8em; } td, th { border: 1px solid #ccd; padding: 0.3em 0.5em;
@@ -79,6 +88,20 @@ def provenance_rows(result) -> list[dict]:
     return rows
 
 
+def software_versions() -> dict[str, str]:
+    """``{name: version}`` of Python and of every distribution in ``_SOFTWARE`` (``"not installed"`` if absent)."""
+    import platform
+    from importlib.metadata import PackageNotFoundError, version
+
+    found = {"Python": platform.python_version()}
+    for name in _SOFTWARE:
+        try:
+            found[name] = version(name)
+        except PackageNotFoundError:
+            found[name] = "not installed"
+    return found
+
+
 def _figure_html(path: Path) -> str:
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     text = html.escape(caption(path))
@@ -105,16 +128,22 @@ def write_html_report(path: Path, title: str, sections: list[Section], provenanc
     nav = "".join(f'<a href="#{a}">{html.escape(s.title)}</a>' for a, s in zip(anchors, sections))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
              f"<style>{_CSS}</style></head><body><h1>{html.escape(title)}</h1>",
-             f"<p>Written {datetime.datetime.now().isoformat(timespec='seconds')} by spflow.</p>",
-             f"<nav>{nav}<a href='#provenance'>Provenance</a></nav>"]
+             f"<p>Written {datetime.datetime.now().isoformat(timespec='seconds')} by spflow "
+             f"{html.escape(software_versions()['spflow'])}.</p>",
+             f"<nav>{nav}<a href='#provenance'>Provenance</a><a href='#software'>Software</a></nav>"]
     for anchor, section in zip(anchors, sections):
         parts.append(f"<h2 id='{anchor}'>{html.escape(section.title)}</h2>")
+        parts.extend(f"<p class='warning'>{html.escape(line.strip())}</p>" for line in section.lines
+                     if _WARNING.search(line))
         if section.lines:
             parts.append(f"<pre>{html.escape(chr(10).join(section.lines))}</pre>")
         parts.extend(_figure_html(f) for f in section.figures)
     parts.append("<h2 id='provenance'>Provenance</h2><p>Every node of the run: the stage it ran, its parameters and "
                  "the provenance key its result is cached under.</p>")
     parts.append(_provenance_html(provenance))
+    versions = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>"
+                       for k, v in software_versions().items())
+    parts.append(f"<h2 id='software'>Software</h2><table><tr><th>package</th><th>version</th></tr>{versions}</table>")
     parts.append("</body></html>")
     tmp = path.with_suffix(".html.tmp")
     tmp.write_text("\n".join(parts), encoding="utf-8")
