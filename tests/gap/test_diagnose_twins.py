@@ -54,6 +54,8 @@ def test_null_twin_is_not_flagged(tmp_path, capsys):
     assert "verdict: none" in capsys.readouterr().out
     for name in ("gap_heatmap", "fingerprint_angles", "candidates", "predictions", "pointwise_scores"):
         assert (out / f"{name}.png").stat().st_size > 10_000
+    page = (out / "report.html").read_text()  # the HTML report: the verdict, the inputs, every figure inlined
+    assert "verdict: none" in page and cal in page and page.count("data:image/png;base64,") == 5
     with xr.open_dataset(out / "gap_report.nc") as ds:
         assert summary(ds.load()) == result  # the summary is a function of the saved report alone
     # a noise-only misfit: the calibration chi2 is consistent with its degrees of freedom

@@ -13,7 +13,8 @@ the ``diagnose`` stage's options (``variables``, ``pv_step``, ``alpha``, ``short
 schedule and measurement chain) and the base model is the study's (``[parameters]``, ``[effects]``) on 60 cells; an
 optional ``--base`` file then gives only ``cells``, ``catalogue`` and ``[diagnosis]``. The study's summary and every
 default it took are printed first. Writes
-``gap_report.nc``, ``summary.json`` and the figures into ``DIR`` (default ``out/diagnose``); when the verdict leaves
+``gap_report.nc``, ``summary.json``, the figures and ``report.html`` (run settings, the verdict's lines, the figures,
+software versions) into ``DIR`` (default ``out/diagnose``); when the verdict leaves
 two or more candidates in its ambiguity set, also the proposed next coreflood (``next_experiment.toml``, ``.json``,
 ``next_experiment_study.toml``; :mod:`~spflow.plugins.gap.next_after_diagnosis`), unless ``--no-next-experiment``.
 """
@@ -27,6 +28,7 @@ import tomllib
 from pathlib import Path
 
 from spflow.core.errors import ParameterError
+from spflow.core.html_report import Section, write_html_report
 from spflow.core.params import validate_params
 from spflow.core.stage import StageContext
 
@@ -61,9 +63,9 @@ def _config(path: str) -> dict:
         raise ParameterError(f"--base {path!r}: not valid TOML: {exc}") from None
 
 
-def _study_inputs(path: str, config: dict) -> tuple[list, list, dict]:
-    """The study's calibration and held-out sources and its base model (``cells`` from ``config``, default 60);
-    prints the study's summary and the defaults it took."""
+def _study_inputs(path: str, config: dict) -> tuple[list, list, dict, list[str]]:
+    """The study's calibration and held-out sources, its base model (``cells`` from ``config``, default 60) and the
+    lines of the study's summary and the defaults it took (printed here, and kept for the report)."""
     from spflow.study.pipeline_inputs import StudyInputs, study_settings
 
     extra = sorted(set(config) - {"cells"})
@@ -71,10 +73,11 @@ def _study_inputs(path: str, config: dict) -> tuple[list, list, dict]:
         raise ParameterError(f"--base with --study: the study gives the base model, so the file may hold only "
                              f"'cells', 'catalogue' and [diagnosis]; found {extra}")
     inputs = StudyInputs.of(path)
-    for line in study_settings(inputs.study):
+    settings = study_settings(inputs.study)
+    for line in settings:
         print(line)
     base = inputs.study.base_model_config() | {"cells": config.get("cells", 60)}
-    return inputs.observations(inputs.training), inputs.observations(inputs.heldout), base
+    return inputs.observations(inputs.training), inputs.observations(inputs.heldout), base, settings
 
 
 def main(args: argparse.Namespace) -> int:
@@ -96,8 +99,11 @@ def main(args: argparse.Namespace) -> int:
         catalogue = [name.strip() for name in args.catalogue.split(",") if name.strip()]
     if args.jobs < 1:
         raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
+    settings = ["spflow diagnose: " + ", ".join(f"{k} = {v!r}" for k, v in sorted(vars(args).items())
+                                              if not callable(v) and k != "command")]
     if args.study is not None:
-        calibration, heldout, config = _study_inputs(args.study, config)
+        calibration, heldout, config, study_lines = _study_inputs(args.study, config)
+        settings += study_lines
     else:
         calibration, heldout = list(args.observations), list(args.heldout)
     stage = Diagnose(calibration=calibration, heldout=heldout, base=config, catalogue=catalogue, **options)
@@ -110,24 +116,26 @@ def main(args: argparse.Namespace) -> int:
     result = summary(report)
     (out / "summary.json").write_text(json.dumps(result, indent=2))
     figures = write_figures(report, out)
-    print(f"verdict: {result['verdict']}" + (f"; ambiguity set {result['ambiguity_set']}"
-                                             if result["ambiguity_set"] else ""))
-    for effect in result["effects"]:
-        print(f"  effect {effect['name']}: fitted strength {effect['strength']:.4g}")
+    lines = [f"verdict: {result['verdict']}" + (f"; ambiguity set {result['ambiguity_set']}"
+                                                if result["ambiguity_set"] else "")]
+    lines += [f"  effect {effect['name']}: fitted strength {effect['strength']:.4g}" for effect in result["effects"]]
     if result["verdict"] in ("unattributed", "out_of_catalogue"):
-        print(f"  the gap is real (chi2 {result['fit']['chi2_base']} on {result['fit']['dof']:g} dof) but not "
-              "attributable to a catalogued mechanism; where: "
-              + (", ".join(f"{c['variable']}:{c['experiment']}:{c['slug']}" for c in result["gap_cells"][:5])
-                 or "no single cell"))
+        lines.append(f"  the gap is real (chi2 {result['fit']['chi2_base']} on {result['fit']['dof']:g} dof) but not "
+                     "attributable to a catalogued mechanism; where: "
+                     + (", ".join(f"{c['variable']}:{c['experiment']}:{c['slug']}" for c in result["gap_cells"][:5])
+                        or "no single cell"))
     tried = result["tried_not_declared"]
     if tried:
-        print("  tried, not declared: " + ", ".join(f"{t['name']} ({t['strength']:.3g})" for t in tried))
+        lines.append("  tried, not declared: " + ", ".join(f"{t['name']} ({t['strength']:.3g})" for t in tried))
     closed = result["gap_closed"]
-    print(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}")
+    lines.append(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}")
     if args.next_experiment:
         proposal = propose_next_experiment(diag, out, parallel=ctx.parallel() if args.jobs > 1 else None)
-        for line in proposal.lines() if proposal else ["next experiment: none proposed (no ambiguity set of two or "
-                                                        "more candidates to separate)"]:
-            print(line)
-    print(f"wrote {out / 'gap_report.nc'}, {out / 'summary.json'} and {len(figures)} figures", file=sys.stderr)
+        lines += proposal.lines() if proposal else ["next experiment: none proposed (no ambiguity set of two or "
+                                                    "more candidates to separate)"]
+    for line in lines:
+        print(line)
+    html = write_html_report(out / "report.html", "spflow diagnose",
+                             [Section("Run settings", settings), Section("Gap diagnosis", lines, figures)], [])
+    print(f"wrote {out / 'gap_report.nc'}, {out / 'summary.json'}, {len(figures)} figures and {html}", file=sys.stderr)
     return 0
