@@ -6,7 +6,7 @@
     spflow status PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
     spflow report PIPELINE [--study FILE] [--profile NAME] [--quick] [--set NODE.PARAM=VALUE ...] [--cache DIR]
                            [--out DIR]
-    spflow list [pipelines|stages|effects|surrogates|params]
+    spflow list [pipelines|stages|effects|surrogates|commands|params]
     spflow clean [--cache DIR] [--tmp]
     spflow diagnose --observations FILE [FILE ...] [--heldout FILE ...] --base CONFIG [--catalogue NAMES]
                     [--out DIR] [--jobs N]
@@ -42,10 +42,6 @@ from spflow.core.pipeline import Pipeline
 from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
 from spflow.core.plugins import get_registry
 from spflow.core.runners import BACKENDS
-from spflow.plugins.gap.command import add_parser as add_diagnose_parser
-from spflow.plugins.gap.command import main as diagnose_command
-from spflow.export.command import add_parser as add_export_parser, main as export_command
-from spflow.study.command import add_parser as add_study_parsers, main as study_command
 from spflow.study.pipeline_inputs import resolve_study, study_settings
 
 
@@ -201,6 +197,10 @@ def _cmd_list(args: argparse.Namespace) -> int:
             cls = registry.surrogate_kinds[kind]
             doc = (cls.__doc__ or "").strip().splitlines()[0] if cls.__doc__ else ""
             print(f"  {kind} (from {registry.providers['surrogate:' + kind]}): {doc}")
+    if what in ("commands", "all"):
+        print("commands from plugins:")
+        for name in sorted(registry.commands):
+            print(f"  {name} (from {registry.providers['command:' + name]})")
     if what in ("params", "all"):
         from spflow.plugins.forward.parameters import parameter_table
 
@@ -253,25 +253,25 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE",
                        help="override a node's parameter (VALUE parsed as JSON, else a string); repeatable")
 
-    p_list = sub.add_parser("list", help="list pipelines, registered stages, effects, surrogate kinds and forward-model parameters")
-    p_list.add_argument("what", nargs="?", choices=["pipelines", "stages", "effects", "surrogates", "params", "all"], default="all")
+    p_list = sub.add_parser("list", help="list pipelines, registered stages, effects, surrogate kinds, commands and "
+                                         "forward-model parameters")
+    p_list.add_argument("what", nargs="?", default="all",
+                        choices=["pipelines", "stages", "effects", "surrogates", "commands", "params", "all"])
 
     p_clean = sub.add_parser("clean", help="delete the cache (only what spflow stores; refuses a non-cache directory)")
     p_clean.add_argument("--tmp", action="store_true", help="only delete unfinished temporary entries")
 
     for p in (p_run, p_status, p_report, p_clean):
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
-    add_diagnose_parser(sub)
-    add_export_parser(sub)
-    add_study_parsers(sub)
+    for add_parser in dict.fromkeys(add for add, _ in get_registry().commands.values()):  # plugins' commands
+        add_parser(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    handler = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean,
-               "diagnose": diagnose_command, "export": export_command, "compare": export_command,
-               "init": study_command, "check": study_command}[args.command]
+    core = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean}
+    handler = core.get(args.command) or get_registry().commands[args.command][1]
     with console_logging():
         try:
             return handler(args)

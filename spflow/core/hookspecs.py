@@ -54,6 +54,16 @@ class SpflowHookSpecs:
         """
 
     @hookspec
+    def spflow_register_commands(self, register):
+        """Contribute ``spflow`` sub-commands: ``register(names, add_parser, run)`` with ``names`` the sub-command
+        names the parser adds (a tuple), ``add_parser(subparsers)`` adding them to the CLI's ``argparse`` sub-parsers
+        and ``run(args) -> int`` the exit status of one invocation (``args.command`` says which name was used). A name
+        already taken (the core commands run, status, report, list, clean, or another plugin's) is refused.
+
+        .. versionadded:: 0.2
+        """
+
+    @hookspec
     def spflow_register_surrogate_kinds(self, register):
         """Contribute surrogate kinds: ``register(SurrogateSubclass)`` for each, a subclass of
         :class:`spflow.plugins.surrogates.contract.Surrogate` with a unique class attribute ``kind``. A stored surrogate

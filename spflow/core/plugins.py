@@ -39,6 +39,9 @@ from .stage import Stage
 
 __all__ = ["Registry", "get_registry", "reset_registry", "plugin_manager", "register_plugin", "unregister_plugin"]
 
+#: The sub-commands of the CLI itself; plugins add others through ``spflow_register_commands``.
+CORE_COMMANDS = ("run", "status", "report", "list", "clean")
+
 BUILTIN_PLUGINS = ("spflow.plugins.builtin", "spflow.plugins.run_log", "spflow.plugins.progress_report")
 
 #: Plugins registered at run time with ``register_plugin`` (e.g. from a notebook or a test), by name.
@@ -52,6 +55,8 @@ class Registry:
     stages: dict[str, type[Stage]] = field(default_factory=dict)
     effects: dict[str, Any] = field(default_factory=dict)
     surrogate_kinds: dict[str, type] = field(default_factory=dict)
+    #: sub-command name -> (add_parser, run) of the CLI (:func:`spflow.cli.main`)
+    commands: dict[str, tuple[Callable[..., None], Callable[..., int]]] = field(default_factory=dict)
     providers: dict[str, str] = field(default_factory=dict)
     #: Calls a lifecycle hook of every plugin: ``registry.notify("spflow_node_end", node=..., ...)``.
     notify: Callable[..., None] = field(default=lambda hookname, **kwargs: None, repr=False)
@@ -244,10 +249,26 @@ def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Re
         reg.surrogate_kinds[kind] = cls
         reg.providers["surrogate:" + kind] = _provider_name(cls)
 
+    def register_command(names: Any, add_parser: Any, run: Any) -> None:
+        names = (names,) if isinstance(names, str) else tuple(names)
+        if not names or not all(isinstance(n, str) and n for n in names) or not (callable(add_parser)
+                                                                                  and callable(run)):
+            raise PluginError("spflow_register_commands: expected register(names, add_parser, run) with non-empty "
+                              f"names and two callables, got {names!r}")
+        for name in names:
+            if name in CORE_COMMANDS or name in reg.commands:
+                owner = "spflow's core" if name in CORE_COMMANDS else reg.providers["command:" + name]
+                raise PluginError(f"command {name!r} is already taken (by {owner}); {_provider_name(run)} cannot "
+                                  "register it")
+        for name in names:
+            reg.commands[name] = (add_parser, run)
+            reg.providers["command:" + name] = _provider_name(run)
+
     _call_hook(pm, third_party, "spflow_register_stages", register_stage)
     _call_hook(pm, third_party, "spflow_register_effects", register_effect)
     _call_hook(pm, third_party, "spflow_register_hashers", hashing.register_hasher)
     _call_hook(pm, third_party, "spflow_register_surrogate_kinds", register_surrogate_kind)
+    _call_hook(pm, third_party, "spflow_register_commands", register_command)
     return reg
 
 

@@ -1,4 +1,4 @@
-"""The built-in plugin: registers spflow's own stages, effects and surrogate kinds through the public hooks."""
+"""The built-in plugin: registers spflow's own stages, effects, surrogate kinds and commands through the public hooks."""
 
 from __future__ import annotations
 
@@ -47,6 +47,17 @@ def spflow_register_surrogate_kinds(register):
 
     for kind in (PCE, GP, PCK):
         register(kind)
+
+
+@hookimpl
+def spflow_register_commands(register):
+    from spflow.export import command as export_command
+    from spflow.plugins.gap import command as diagnose_command
+    from spflow.study import command as study_command
+
+    register(("diagnose",), diagnose_command.add_parser, diagnose_command.main)
+    register(("export", "compare"), export_command.add_parser, export_command.main)
+    register(("init", "check"), study_command.add_parser, study_command.main)
 
 
 @hookimpl
