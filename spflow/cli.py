@@ -40,7 +40,7 @@ from spflow.core.html_report import Section, provenance_rows, sections_from, wri
 from spflow.core.overrides import apply_overrides
 from spflow.core.pipeline import Pipeline
 from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
-from spflow.core.plugins import get_registry
+from spflow.core.plugins import get_commands, get_registry
 from spflow.core.runners import BACKENDS
 from spflow.study.pipeline_inputs import resolve_study, study_settings
 
@@ -199,8 +199,8 @@ def _cmd_list(args: argparse.Namespace) -> int:
             print(f"  {kind} (from {registry.providers['surrogate:' + kind]}): {doc}")
     if what in ("commands", "all"):
         print("commands from plugins:")
-        for name in sorted(registry.commands):
-            print(f"  {name} (from {registry.providers['command:' + name]})")
+        for name, command in sorted(get_commands().items()):
+            print(f"  {name} (from {command.provider})")
     if what in ("params", "all"):
         from spflow.plugins.forward.parameters import parameter_table
 
@@ -263,7 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     for p in (p_run, p_status, p_report, p_clean):
         p.add_argument("--cache", default=".spflow", metavar="DIR", help="cache directory (default .spflow)")
-    for add_parser in dict.fromkeys(add for add, _ in get_registry().commands.values()):  # plugins' commands
+    for add_parser in dict.fromkeys(c.add_parser for c in get_commands().values()):  # the plugins' commands
         add_parser(sub)
     return parser
 
@@ -271,7 +271,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     core = {"run": _cmd_run, "status": _cmd_status, "report": _cmd_report, "list": _cmd_list, "clean": _cmd_clean}
-    handler = core.get(args.command) or get_registry().commands[args.command][1]
+    handler = core.get(args.command) or get_commands()[args.command].run
     with console_logging():
         try:
             return handler(args)

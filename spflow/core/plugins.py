@@ -37,7 +37,8 @@ from .errors import PipelineError, PluginError, PluginWarning, SchemaError
 from .hookspecs import PROJECT_NAME, SpflowHookSpecs
 from .stage import Stage
 
-__all__ = ["Registry", "get_registry", "reset_registry", "plugin_manager", "register_plugin", "unregister_plugin"]
+__all__ = ["Registry", "Command", "get_registry", "get_commands", "reset_registry", "plugin_manager", "register_plugin",
+           "unregister_plugin"]
 
 #: The sub-commands of the CLI itself; plugins add others through ``spflow_register_commands``.
 CORE_COMMANDS = ("run", "status", "report", "list", "clean")
@@ -55,8 +56,6 @@ class Registry:
     stages: dict[str, type[Stage]] = field(default_factory=dict)
     effects: dict[str, Any] = field(default_factory=dict)
     surrogate_kinds: dict[str, type] = field(default_factory=dict)
-    #: sub-command name -> (add_parser, run) of the CLI (:func:`spflow.cli.main`)
-    commands: dict[str, tuple[Callable[..., None], Callable[..., int]]] = field(default_factory=dict)
     providers: dict[str, str] = field(default_factory=dict)
     #: Calls a lifecycle hook of every plugin: ``registry.notify("spflow_node_end", node=..., ...)``.
     notify: Callable[..., None] = field(default=lambda hookname, **kwargs: None, repr=False)
@@ -249,26 +248,10 @@ def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Re
         reg.surrogate_kinds[kind] = cls
         reg.providers["surrogate:" + kind] = _provider_name(cls)
 
-    def register_command(names: Any, add_parser: Any, run: Any) -> None:
-        names = (names,) if isinstance(names, str) else tuple(names)
-        if not names or not all(isinstance(n, str) and n for n in names) or not (callable(add_parser)
-                                                                                  and callable(run)):
-            raise PluginError("spflow_register_commands: expected register(names, add_parser, run) with non-empty "
-                              f"names and two callables, got {names!r}")
-        for name in names:
-            if name in CORE_COMMANDS or name in reg.commands:
-                owner = "spflow's core" if name in CORE_COMMANDS else reg.providers["command:" + name]
-                raise PluginError(f"command {name!r} is already taken (by {owner}); {_provider_name(run)} cannot "
-                                  "register it")
-        for name in names:
-            reg.commands[name] = (add_parser, run)
-            reg.providers["command:" + name] = _provider_name(run)
-
     _call_hook(pm, third_party, "spflow_register_stages", register_stage)
     _call_hook(pm, third_party, "spflow_register_effects", register_effect)
     _call_hook(pm, third_party, "spflow_register_hashers", hashing.register_hasher)
     _call_hook(pm, third_party, "spflow_register_surrogate_kinds", register_surrogate_kind)
-    _call_hook(pm, third_party, "spflow_register_commands", register_command)
     return reg
 
 
@@ -285,8 +268,48 @@ def get_registry() -> Registry:
 
 def reset_registry() -> None:
     """Forget the registry so that the next ``get_registry()`` rediscovers plugins (after installing one)."""
-    global _REGISTRY
+    global _REGISTRY, _COMMANDS
     _REGISTRY = None
+    _COMMANDS = None
+
+
+@dataclass(frozen=True)
+class Command:
+    """A sub-command a plugin added to the CLI: its parser, its runner and who provided it."""
+
+    add_parser: Callable[..., None]
+    run: Callable[..., int]
+    provider: str
+
+
+_COMMANDS: dict[str, Command] | None = None
+
+
+def get_commands() -> dict[str, Command]:
+    """The plugins' sub-commands (hook ``spflow_register_commands``), name -> :class:`Command`. Built apart from
+    the registry: the CLI needs only these to build its parser, and collecting stages would import every stage
+    module (seconds) before ``spflow check`` or ``spflow init`` could start."""
+    global _COMMANDS
+    if _COMMANDS is None:
+        commands: dict[str, Command] = {}
+
+        def register(names: Any, add_parser: Any, run: Any) -> None:
+            names = (names,) if isinstance(names, str) else tuple(names)
+            if not names or not all(isinstance(n, str) and n for n in names) or not (callable(add_parser)
+                                                                                      and callable(run)):
+                raise PluginError("spflow_register_commands: expected register(names, add_parser, run) with "
+                                  f"non-empty names and two callables, got {names!r}")
+            for name in names:
+                if name in CORE_COMMANDS or name in commands:
+                    owner = "spflow's core" if name in CORE_COMMANDS else commands[name].provider
+                    raise PluginError(f"command {name!r} is already taken (by {owner}); {_provider_name(run)} "
+                                      "cannot register it")
+            for name in names:
+                commands[name] = Command(add_parser, run, _provider_name(run))
+
+        _call_hook(*_load_plugins(), "spflow_register_commands", register)
+        _COMMANDS = commands
+    return _COMMANDS
 
 
 def register_plugin(plugin: object, name: str) -> None:

@@ -6,14 +6,14 @@ import pytest
 import spflow
 from spflow.cli import main
 from spflow.core.errors import PluginError
-from spflow.core.plugins import CORE_COMMANDS, get_registry
+from spflow.core.plugins import CORE_COMMANDS, get_commands
 
 
 def test_the_builtin_commands_come_through_the_hook():
-    commands = get_registry().commands
+    commands = get_commands()
     assert {"diagnose", "export", "compare", "init", "check"} <= set(commands)
     assert not set(commands) & set(CORE_COMMANDS)
-    assert get_registry().providers["command:diagnose"] == "spflow.plugins.gap.command"
+    assert commands["diagnose"].provider == "spflow.plugins.gap.command"
 
 
 class _Hello:
@@ -58,6 +58,6 @@ def test_a_taken_name_is_refused(name):
     spflow.register_plugin(Clash(), name="clash")
     try:
         with pytest.raises(PluginError, match=f"command '{name}' is already taken"):
-            get_registry()
+            get_commands()
     finally:
         spflow.unregister_plugin("clash")
