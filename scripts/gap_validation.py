@@ -751,12 +751,10 @@ def main(argv=None) -> int:
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     command = "python scripts/gap_validation.py " + " ".join(sys.argv[1:] if argv is None else argv)
-    if args.report_only:
-        pass
-    elif args.next_experiment:
+    if args.next_experiment and not args.report_only:
         file = next_experiment_phase(results, key, args.cells, args.jobs, args.added_as)
         file.with_suffix(".command").write_text(command)
-    else:
+    elif not args.report_only:
         counts = (8, 4, 4, 4) if args.reduced else (args.null, args.per_effect, args.pairs, args.ooc)
         specs = scenarios(*counts)
         file = results / f"{key}.jsonl"

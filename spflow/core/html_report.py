@@ -124,12 +124,13 @@ def _provenance_html(rows: list[dict]) -> str:
 def write_html_report(path: Path, title: str, sections: list[Section], provenance: list[dict]) -> Path:
     """Write the report (module docstring) to ``path`` atomically and return it."""
     path = Path(path)
+    versions = software_versions()
     anchors = [f"s{i}" for i in range(len(sections))]
     nav = "".join(f'<a href="#{a}">{html.escape(s.title)}</a>' for a, s in zip(anchors, sections))
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
              f"<style>{_CSS}</style></head><body><h1>{html.escape(title)}</h1>",
              f"<p>Written {datetime.datetime.now().isoformat(timespec='seconds')} by spflow "
-             f"{html.escape(software_versions()['spflow'])}.</p>",
+             f"{html.escape(versions['spflow'])}.</p>",
              f"<nav>{nav}<a href='#provenance'>Provenance</a><a href='#software'>Software</a></nav>"]
     for anchor, section in zip(anchors, sections):
         parts.append(f"<h2 id='{anchor}'>{html.escape(section.title)}</h2>")
@@ -141,9 +142,8 @@ def write_html_report(path: Path, title: str, sections: list[Section], provenanc
     parts.append("<h2 id='provenance'>Provenance</h2><p>Every node of the run: the stage it ran, its parameters and "
                  "the provenance key its result is cached under.</p>")
     parts.append(_provenance_html(provenance))
-    versions = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>"
-                       for k, v in software_versions().items())
-    parts.append(f"<h2 id='software'>Software</h2><table><tr><th>package</th><th>version</th></tr>{versions}</table>")
+    rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>" for k, v in versions.items())
+    parts.append(f"<h2 id='software'>Software</h2><table><tr><th>package</th><th>version</th></tr>{rows}</table>")
     parts.append("</body></html>")
     tmp = path.with_suffix(".html.tmp")
     tmp.write_text("\n".join(parts), encoding="utf-8")
