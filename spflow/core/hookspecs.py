@@ -70,7 +70,7 @@ class SpflowHookSpecs:
         whose ``attrs["surrogate"]`` names that kind is then rebuilt by its ``from_dataset`` wherever spflow loads one
         (:func:`~spflow.plugins.surrogates.contract.load_surrogate`: validation, calibration, MCMC, figures).
 
-        .. versionadded:: 0.1
+        .. versionadded:: 0.2
         """
 
     @hookspec
