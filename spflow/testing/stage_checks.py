@@ -210,6 +210,7 @@ class _StageRun:
         self.stage, self.inputs = stage, dict(inputs)
         self.given: dict[str, xr.Dataset] = {}
         self.result: xr.Dataset | None = None
+        self.impure = False
 
     def context(self) -> StageContext:
         return StageContext(node=f"check_stage[{self.stage.name}]", n_jobs=1, verbose=False)
@@ -245,6 +246,7 @@ class _StageRun:
     def purity(self) -> None:
         changed = [f"port {p!r}: " + "; ".join(d) for p in self.inputs
                    if (d := differences(self.inputs[p], self.given[p]))]
+        self.impure = bool(changed)
         if changed:
             raise Broken("run() changed its inputs: " + " | ".join(changed))
 
@@ -279,9 +281,10 @@ class _StageRun:
                 continue
             tried.append(port)
             poisoned = dict(self.inputs, **{port: with_nan(self.inputs[port], names)})
+            given = {p: ds.copy(deep=True) for p, ds in poisoned.items()}
             what = f"a NaN in port {port!r} (variables {names})"
             try:
-                out = self.run(inputs=poisoned)
+                out = self.stage.run(self.context(), **given)
             except SpflowError:
                 continue  # rejected with a clear error
             except Exception as exc:  # noqa: BLE001 - the finding is that it was not a spflow error
@@ -290,6 +293,8 @@ class _StageRun:
             if not isinstance(out, xr.Dataset):
                 problems.append(f"{what}: run() returned a {type(out).__name__}")
                 continue
+            if not self.impure and differences(given[port], poisoned[port]):  # (else purity has said so)
+                problems.append(f"with {what} run() changed that input")
             if self.stage.output is not None:
                 try:
                     self.stage.output.validate(out, stage=self.stage.name, port="output")

@@ -193,3 +193,15 @@ def test_several_broken_contracts_come_in_one_error_with_contract_and_fix():
     for name in ("purity", "determinism", "output_schema"):
         check = STAGE_CHECKS[name]
         assert f"- {name}: {check.contract}" in message and f"fix: {check.fix}" in message
+
+
+def test_filling_a_nan_input_in_place_fails_nan_inputs():
+    class FillsInPlace(Scale):
+        def run(self, ctx, data):
+            values = data["y"].values
+            values[np.isnan(values)] = -1.0  # writes into the input only when it holds a NaN
+            return super().run(ctx, data)
+
+    with pytest.raises(ConformanceError, match="run\\(\\) changed that input") as caught:
+        check_stage(FillsInPlace, inputs())
+    assert caught.value.failed == ["nan_inputs"]
