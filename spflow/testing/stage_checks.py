@@ -33,7 +33,8 @@ The contract (``spflow/core/stage.py``, docs/plugins.md "A stage") as checks, ea
     a NaN in a float input the port schema lets through (undeclared, or ``allow_nan``) is rejected with a spflow error
     (:class:`~spflow.core.errors.SpflowError`, e.g. ``ParameterError`` naming the field), propagated into the result,
     or ignored (the result unchanged) — never turned silently into numbers, never a raw numpy/scipy traceback. Ports
-    listed in ``nan_as_missing`` document NaN as "not measured": there the stage must run or reject cleanly.
+    listed in ``nan_as_missing`` document NaN as "not measured": there the stage must run or reject cleanly. It
+    compares results with the clean run's, so it needs ``output_schema`` and ``determinism`` to have passed.
 """
 
 from __future__ import annotations
@@ -215,9 +216,10 @@ class _StageRun:
     def context(self) -> StageContext:
         return StageContext(node=f"check_stage[{self.stage.name}]", n_jobs=1, verbose=False)
 
-    def run(self, stage: Stage | None = None, inputs: Mapping[str, xr.Dataset] | None = None) -> Any:
-        copies = {p: ds.copy(deep=True) for p, ds in (inputs or self.inputs).items()}
-        return (stage or self.stage).run(self.context(), **copies)
+    def rerun(self) -> Any:
+        """A second stage built with the same parameters, on fresh copies of the inputs."""
+        copies = {p: ds.copy(deep=True) for p, ds in self.inputs.items()}
+        return type(self.stage)(**self.stage.params).run(self.context(), **copies)
 
     def first(self) -> None:
         self.given = {p: ds.copy(deep=True) for p, ds in self.inputs.items()}
@@ -251,7 +253,7 @@ class _StageRun:
             raise Broken("run() changed its inputs: " + " | ".join(changed))
 
     def determinism(self) -> None:
-        again = self.run(type(self.stage)(**self.stage.params))
+        again = self.rerun()
         found = differences(self.result, again) if isinstance(again, xr.Dataset) else [f"a {type(again).__name__}"]
         if found:
             raise Broken("a second run differs: " + "; ".join(found))
@@ -361,5 +363,6 @@ def check_stage(stage: type[Stage] | Stage, inputs: Mapping[str, xr.Dataset] | N
     checks.run(c["purity"], run.purity, needs=("runs",))
     checks.run(c["determinism"], run.determinism, needs=("runs",))
     checks.run(c["cache_round_trip"], run.cache_round_trip, needs=("runs",))
-    checks.run(c["nan_inputs"], run.nan_inputs, set(nan_as_missing), needs=("runs", "output_schema"))
+    checks.run(c["nan_inputs"], run.nan_inputs, set(nan_as_missing),
+               needs=("runs", "output_schema", "determinism"))
     return checks.finish()
