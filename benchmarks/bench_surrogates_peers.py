@@ -3,9 +3,10 @@
 Issue #24, first part: spflow's default sparse PCE (hybrid LARS, degree- and q-adaptive, :class:`PCE.fit`) against
 
 * OpenTURNS (``pip install openturns``, or the ``bench`` extra of pyproject.toml): ``FunctionalChaosAlgorithm`` with
-  ``LeastSquaresMetaModelSelectionFactory(LARS(), CorrectedLeaveOneOut())`` on a fixed candidate basis — hyperbolic
-  truncation with spflow's default q, total degree the largest p <= spflow's default ``degree_max`` whose basis has at
-  most spflow's default ``max_terms_ratio`` x N terms (OpenTURNS does not search the degree itself);
+  ``LeastSquaresMetaModelSelectionFactory(LARS(), CorrectedLeaveOneOut())`` on a fixed candidate basis (OpenTURNS does
+  not search the degree itself): the largest of spflow's candidate sets A(p, q) — spflow's default q, p <= spflow's
+  default ``degree_max`` — within spflow's basis-size limit, given to OpenTURNS as the first |A(p, q)| functions of
+  its ``HyperbolicAnisotropicEnumerateFunction(d, q)`` (the same set: that enumeration orders by q-norm);
 * chaospy ordinary least squares (``fit_regression``) at a degree fixed before seeing the data: the largest total
   degree whose full basis has at most N/2 terms (two runs per coefficient).
 
@@ -43,6 +44,7 @@ import warnings
 import numpy as np
 from scipy.stats import qmc
 
+from spflow.plugins.surrogates.basis import multi_indices
 from spflow.plugins.surrogates.degree_adaptive import fit_pce
 from spflow.plugins.surrogates.outputs import OutputIndex
 from spflow.plugins.surrogates.pce_model import PCE
@@ -77,7 +79,7 @@ PROBLEMS = {
 
 
 def spflow_defaults() -> dict:
-    """fit_pce's defaults (degree cap, q, basis-size ratio when the installed spflow has one)."""
+    """fit_pce's defaults (degree cap, q, basis-size ratio)."""
     params = inspect.signature(fit_pce).parameters
     return {name: p.default for name, p in params.items() if p.default is not inspect.Parameter.empty}
 
@@ -98,16 +100,16 @@ def fit_spflow(x, y, lower, upper, xv):
     return model.predict(xv)[0][:, 0], reported, cpu, model.info["degree"]
 
 
-def ot_degree(d: int, n: int) -> int:
-    import openturns as ot
+def ot_basis(d: int, n: int) -> tuple[int, int]:
+    """(degree, number of terms) of the candidate set given to OpenTURNS: the largest A(p, q) spflow may try."""
+    from spflow.plugins.surrogates.degree_adaptive import MIN_TERMS  # imported here: --methods spflow runs on older code
 
     defaults = spflow_defaults()
-    enum = ot.HyperbolicAnisotropicEnumerateFunction(d, float(defaults["q"]))
-    ratio = defaults.get("max_terms_ratio", 10.0)
+    limit = max(defaults["max_terms_ratio"] * n, MIN_TERMS)
     degree = 1
-    while degree < defaults["degree_max"] and enum.getBasisSizeFromTotalDegree(degree + 1) <= ratio * n:
+    while degree < defaults["degree_max"] and multi_indices(d, degree + 1, defaults["q"]).shape[0] <= limit:
         degree += 1
-    return degree
+    return degree, multi_indices(d, degree, defaults["q"]).shape[0]
 
 
 def fit_openturns(x, y, lower, upper, xv):
@@ -115,14 +117,14 @@ def fit_openturns(x, y, lower, upper, xv):
 
     ot.Log.Show(ot.Log.NONE)
     d = x.shape[1]
-    degree = ot_degree(d, x.shape[0])
+    degree, size = ot_basis(d, x.shape[0])
     start = time.process_time()
     distribution = ot.JointDistribution([ot.Uniform(float(a), float(b)) for a, b in zip(lower, upper)])
     enum = ot.HyperbolicAnisotropicEnumerateFunction(d, float(spflow_defaults()["q"]))
     basis = ot.OrthogonalProductPolynomialFactory([ot.LegendreFactory()] * d, enum)
     selection = ot.LeastSquaresMetaModelSelectionFactory(ot.LARS(), ot.CorrectedLeaveOneOut())
     algo = ot.FunctionalChaosAlgorithm(ot.Sample(x), ot.Sample(y[:, None]), distribution,
-                                       ot.FixedStrategy(basis, enum.getBasisSizeFromTotalDegree(degree)),
+                                       ot.FixedStrategy(basis, size),
                                        ot.LeastSquaresStrategy(selection))
     algo.run()
     result = algo.getResult()

@@ -94,15 +94,17 @@ def test_cap_warning_fires_when_the_selected_degree_is_degree_max():
 
 def test_cap_warning_fires_at_the_basis_size_limit_and_is_stored():
     rng = np.random.default_rng(6)
-    x = rng.uniform(0, 1, (60, 3))
-    y = np.exp(2 * x[:, 0]) * np.cos(3 * x[:, 1]) + x[:, 2]
+    x = rng.uniform(0, 1, (120, 8))
+    y = np.exp(1.5 * x[:, 0]) * np.cos(2 * x[:, 1]) + np.sin(3 * x[:, 2])
     outputs = OutputIndex(np.array(["y"]), np.array([""]), np.array([np.nan]), {"y": "1"})
-    # one candidate term per run: at most 60 terms, so degree 5 (56 terms, q = 1) is the last one tried
-    with pytest.warns(DegreeCapWarning, match=r"basis-size limit: degree 6 needs 84 candidate terms"):
-        model = PCE.fit(["a", "b", "c"], np.zeros(3), np.ones(3), outputs, x, y[:, None], q=1.0, solver="lars",
+    names = [f"x{k}" for k in range(8)]
+    # one candidate term per run would be 120 terms; the limit is never below 1000 terms, so degree 4 (495 terms at
+    # q = 1) is the last degree tried and degree 5 (1287 terms) is not
+    with pytest.warns(DegreeCapWarning, match=r"basis-size limit: degree 5 needs 1287 candidate terms"):
+        model = PCE.fit(names, np.zeros(8), np.ones(8), outputs, x, y[:, None], q=1.0, solver="lars",
                         max_terms_ratio=1.0)
     ds = model.to_dataset()
-    assert model.info["degree"] == 5 and ds.attrs["degree_cap"] == 5
+    assert model.info["degree"] == 4 and ds.attrs["degree_cap"] == 4
     assert "basis-size limit" in ds.attrs["degree_cap_warning"]
 
 

@@ -33,7 +33,7 @@ PCE_PARAMS = {
                         doc="largest total degree p tried (the thesis used 5; the search stops earlier by itself once "
                             "two degrees in a row do not improve the corrected LOO)"),
     "max_terms_ratio": Param(float, MAX_TERMS_RATIO, bounds=(1.0, 1000.0),
-                             doc="largest candidate basis tried, in terms per training run"),
+                             doc="largest candidate basis tried, in terms per training run (never below 1000 terms)"),
     "q": Param(float, 0.9, bounds=(0.05, 1.0), doc="q-norm of the hyperbolic truncation (thesis: 0.9)"),
     "solver": Param(str, "ols", choices=list(SOLVERS), doc="OLS or hybrid LARS (sparse)"),
     "target_loo": Param(float, 0.0, bounds=(0.0, 1.0),
