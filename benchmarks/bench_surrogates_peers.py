@@ -102,7 +102,8 @@ def fit_spflow(x, y, lower, upper, xv):
 
 def ot_basis(d: int, n: int) -> tuple[int, int]:
     """(degree, number of terms) of the candidate set given to OpenTURNS: the largest A(p, q) spflow may try."""
-    from spflow.plugins.surrogates.degree_adaptive import MIN_TERMS  # imported here: --methods spflow runs on older code
+    # imported here, not at the top: ``--methods spflow`` must also run on an spflow without it (before/after tables)
+    from spflow.plugins.surrogates.degree_adaptive import MIN_TERMS
 
     defaults = spflow_defaults()
     limit = max(defaults["max_terms_ratio"] * n, MIN_TERMS)
@@ -166,7 +167,7 @@ def main() -> None:
     sizes, seeds = ((50, 200), range(2)) if args.quick else ((50, 100, 200, 400), range(5))
     print(f"# {datetime.date.today()}; spflow fit_pce defaults {spflow_defaults()}; "
           f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs; medians over {len(seeds)} seeds")
-    print(f"| problem | N | method | p | eps_val | LOO/eps | fit CPU (s) |")
+    print("| problem | N | method | p | eps_val | LOO/eps | fit CPU (s) |")
     print("|---|---|---|---|---|---|---|")
     total = time.process_time()
     for problem in args.problems.split(","):

@@ -37,10 +37,9 @@ without being fitted. The fits run on one BLAS thread (:mod:`.blas`; the matrice
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-
-import warnings
 
 import numpy as np
 

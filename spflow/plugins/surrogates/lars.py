@@ -52,9 +52,9 @@ __all__ = ["LarsResult", "hybrid_lars", "hybrid_lars_outputs"]
 class LarsResult:
     """The selected sparse model of one output.
 
-    ``active``: column indices of Ψ in ranking order (above), constant first; ``coefficients``: (P,), zero outside ``active``;
-    ``loo``/``modified_loo``/``empirical``: errors of the OLS refit on ``active``; ``path_modified_loo``: the modified
-    LOO of every scored step (index k = constant + k regressors), up to the early stop.
+    ``active``: column indices of Ψ in ranking order (above), constant first; ``coefficients``: (P,), zero outside
+    ``active``; ``loo``/``modified_loo``/``empirical``: errors of the OLS refit on ``active``; ``path_modified_loo``:
+    the corrected LOO of every scored nested model (index k = constant + k regressors), up to the early stop.
     """
 
     active: np.ndarray
