@@ -15,6 +15,7 @@ __all__ = [
     "CacheIntegrityWarning",
     "CacheWarning",
     "PluginWarning",
+    "DegreeCapWarning",
 ]
 
 
@@ -61,3 +62,7 @@ class CacheWarning(UserWarning):
 
 class PluginWarning(UserWarning):
     """A third-party plugin failed (at import, in a hook, or with an unknown hook) and is left out; spflow goes on."""
+
+
+class DegreeCapWarning(UserWarning):
+    """A degree-adaptive surrogate fit selected the largest degree it was allowed to try: the data may ask for more."""

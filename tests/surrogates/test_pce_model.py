@@ -1,4 +1,4 @@
-"""The ``pce`` surrogate kind: exact reproduction of polynomials, the LOO error variance it reports, blockwise
+"""The ``pce`` surrogate kind: exact reproduction of polynomials, the corrected-LOO error variance it reports, blockwise
 evaluation, and the xarray/netCDF round trip through ``load_surrogate``."""
 
 import numpy as np
@@ -38,9 +38,9 @@ def test_reproduces_polynomials_and_reports_loo_error_variance(model):
     mean, var = model.predict(x)
     np.testing.assert_allclose(mean[:, :2], _f(x)[:, :2], rtol=1e-9, atol=1e-9)
     assert np.abs(mean[:, 2] - _f(x)[:, 2]).max() < 0.05
-    # the reported variance: per output eps_LOO * Var(y_train), constant in x
+    # the reported variance: per output corrected eps*_LOO * Var(y_train), constant in x
     y_train = _f(_x(120, 0))
-    np.testing.assert_allclose(var, np.broadcast_to(model.loo * y_train.var(axis=0), var.shape))
+    np.testing.assert_allclose(var, np.broadcast_to(model.modified_loo * y_train.var(axis=0), var.shape))
     assert var[0, 2] > 0 and np.all(var[:, :2] < 1e-20)
 
 

@@ -39,7 +39,7 @@ _FORWARD_PARAMS = ("experiments", "fixed", "effects", "cells", "pv_step", "schem
 
 class AdaptivePCE(Stage):
     name = "adaptive_pce"
-    version = "1"
+    version = "2"  # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance
     description = "PCE proxy on a growing LHS design until the mean LOO error settles (Algorithm 2)"
     inputs = {"space": SPACE}
     output = SURROGATE

@@ -1,18 +1,35 @@
 """Degree- and q-norm-adaptive PCE fit (UQLab's regression loop; thesis Algorithm 2 lines 6-8).
 
-For p = 1..p_max and each q of the list, the q-norm basis A(p, q) (:mod:`.basis`) is fitted by OLS (:mod:`.regression`)
-or hybrid LARS (:mod:`.lars`) and scored by its modified LOO error. Vector outputs (the 0.1 PV time series of a QoI)
-share one basis: the score of a basis is ε^mean, the mean over outputs of the modified LOO (Eq. 3.9 applied to the
-modified LOO), and the basis with the smallest ε^mean wins. With OLS every output then has coefficients on the whole
-of A(p, q); with LARS each output keeps its own sparse support inside it (zeros elsewhere), as UQLab fits one sparse
-PCE per output component.
+For p = 1, 2, ... and each q of the list, the q-norm basis A(p, q) (:mod:`.basis`) is fitted by OLS
+(:mod:`.regression`) or hybrid LARS (:mod:`.lars`) and scored by its corrected (modified) leave-one-out error
+ε*_LOO = T(P, N) ε_LOO, T(P, N) = N/(N − P) · (1 + tr(C_emp⁻¹)/N) with C_emp = ΨᵀΨ/N the empirical information
+matrix of the P selected terms (Blatman & Sudret 2011, J. Comput. Phys. 230:2345, after Chapelle, Vapnik & Bengio
+2002; UQLab PCE manual Eqs. 1.22-1.23). Vector outputs (the 0.1 PV time series of a QoI) share one basis: the score of
+a basis is ε^mean, the mean over outputs of ε*_LOO (Eq. 3.9 applied to the corrected LOO), and the basis with the
+smallest ε^mean wins. With OLS every output then has coefficients on the whole of A(p, q); with LARS each output keeps
+its own sparse support inside it (zeros elsewhere), as UQLab fits one sparse PCE per output component.
 
 Stopping rules (UQLab defaults):
 
 * q loop (inner): a q giving the same number of terms as the previous q is skipped; the loop ends when the last two
   q values did not improve on the best q of this degree;
-* degree loop (outer, ``early_stop``): ends when the last two degrees both scored worse than the best so far;
-* target accuracy: ends as soon as the best ε^mean <= ``target_loo``.
+* degree loop (outer, ``early_stop``): ends when the last two degrees both failed to improve on the best so far (a
+  tie counts as no improvement: LARS often selects the same terms from a larger basis, and without this rule the
+  search would walk to the cap on ties);
+* target accuracy: ends as soon as the best ε^mean <= ``target_loo``, or <= :data:`EXACT_FIT` (1e-20, a relative
+  RMS error of 1e-10): an exact fit, whose further "improvements" are round-off and would otherwise carry the search
+  to the cap;
+* the cap: ``degree_max`` (default 15), and no basis with more than max(``max_terms_ratio`` · N, :data:`MIN_TERMS`)
+  candidate terms is built (defaults 10 and 1000: LARS's Gram matrix grows as the square of the basis, and a candidate
+  set ten times the number of runs already leaves LARS most of the degree's terms to choose from; below 1000 terms
+  the cost is a few milliseconds and the limit would only cut small designs short — on the 8-D G-function at N = 50
+  it kept p <= 4, ε_val 0.18 against 0.11 at p = 5); the degree loop ends at the first degree all of whose bases
+  exceed it. When the selected degree is the largest one the cap let the search try, the data may
+  have asked for more: a :class:`~spflow.core.errors.DegreeCapWarning` says so and :attr:`PCEFit.cap_warning` keeps
+  the message (the ``pce`` stage stores it in ``attrs["degree_cap_warning"]``).
+
+The thesis capped the degree at 5; that default stalled on smooth but strongly non-linear responses (issue #24:
+Ishigami ε_val ≈ 0.25 at every N), so the search now goes on while the corrected LOO improves.
 
 OLS needs more points than terms (otherwise T(P, N) = ∞, :func:`.regression.loo_correction`), so such bases score ∞
 without being fitted. The fits run on one BLAS thread (:mod:`.blas`; the matrices are at most a few thousand rows).
@@ -20,27 +37,39 @@ without being fitted. The fits run on one BLAS thread (:mod:`.blas`; the matrice
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from spflow.core.errors import ParameterError
+from spflow.core.errors import DegreeCapWarning, ParameterError
 
 from .basis import design_matrix, multi_indices
 from .blas import single_threaded_blas
 from .lars import hybrid_lars_outputs
 from .regression import ols
 
-__all__ = ["PCEFit", "fit_pce", "SOLVERS"]
+__all__ = ["PCEFit", "fit_pce", "SOLVERS", "DEGREE_MAX", "MAX_TERMS_RATIO", "MIN_TERMS", "EXACT_FIT"]
 
 SOLVERS = ("ols", "lars")
+#: Default largest total degree tried (the ``pce`` stages share it).
+DEGREE_MAX = 15
+#: Default largest candidate basis, in terms per training run.
+MAX_TERMS_RATIO = 10.0
+#: The basis-size limit never goes below this many candidate terms.
+MIN_TERMS = 1000
+#: ε^mean at or below which a fit is exact (round-off) and the degree search stops.
+EXACT_FIT = 1e-20
 
 
 @dataclass(frozen=True)
 class PCEFit:
     """The selected expansion: ``indices`` (P, d), ``coefficients`` (m, P), per-output errors (m,) and the training
-    outputs' population variance (m,); ``history`` lists (degree, q, n_terms, ε^mean) of every scored basis."""
+    outputs' population variance (m,); ``history`` lists (degree, q, n_terms, ε^mean) of every scored basis;
+    ``degree_cap`` is the largest degree the search could try (``degree_max`` or the basis-size limit) and
+    ``cap_warning`` the message of the :class:`~spflow.core.errors.DegreeCapWarning` ("" when the selected degree is
+    below the cap or the search stopped on its own)."""
 
     indices: np.ndarray
     coefficients: np.ndarray
@@ -52,6 +81,8 @@ class PCEFit:
     empirical: np.ndarray
     output_variance: np.ndarray
     history: list[tuple[int, float, int, float]] = field(default_factory=list)
+    degree_cap: int = DEGREE_MAX
+    cap_warning: str = ""
 
     @property
     def loo_mean(self) -> float:
@@ -60,7 +91,7 @@ class PCEFit:
 
     @property
     def modified_loo_mean(self) -> float:
-        """The selection score: mean modified LOO over outputs."""
+        """The selection score: mean corrected (modified) LOO over outputs."""
         return float(np.mean(self.modified_loo))
 
     @property
@@ -89,7 +120,8 @@ def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, parallel) -> tuple[n
             np.array([r.modified_loo for r in results]), np.array([r.empirical for r in results]))
 
 
-def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], solver: str, target_loo):
+def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], solver: str, target_loo,
+           max_terms_ratio):
     if z.ndim != 2 or y.ndim != 2 or z.shape[0] != y.shape[0]:
         raise ParameterError(f"fit_pce: need z (N, d) and y (N,) or (N, m) with the same N; got z {z.shape}, "
                              f"y {y.shape}")
@@ -105,6 +137,10 @@ def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], so
         raise ParameterError(f"fit_pce: every q-norm must be in (0, 1], got {list(q)}")
     if solver not in SOLVERS:
         raise ParameterError(f"fit_pce: solver must be one of {SOLVERS}, got {solver!r}")
+    if isinstance(max_terms_ratio, bool) or not isinstance(max_terms_ratio, (int, float, np.number)) \
+            or not max_terms_ratio >= 1.0 or not np.isfinite(max_terms_ratio):
+        raise ParameterError(f"fit_pce: max_terms_ratio must be a finite number >= 1 (candidate terms per training "
+                             f"run), got {max_terms_ratio!r}")
     if target_loo is not None and not target_loo >= 0.0:
         raise ParameterError(f"fit_pce: target_loo must be >= 0 or None, got {target_loo!r}")
     if solver == "ols" and z.shape[0] <= z.shape[1] + 1:
@@ -113,29 +149,36 @@ def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], so
                              f"add runs or use solver 'lars'")
 
 
-def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = 5, q: float | Sequence[float] = 0.9,
+def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float | Sequence[float] = 0.9,
             solver: str = "ols", target_loo: float | None = None, early_stop: bool = True,
-            parallel=None, progress: Callable[[int, int], None] | None = None) -> PCEFit:
+            max_terms_ratio: float = MAX_TERMS_RATIO, parallel=None,
+            progress: Callable[[int, int], None] | None = None) -> PCEFit:
     """Fit a PCE of ``y`` (N,) or (N, m) at points ``z`` (N, d) of [-1, 1]^d, choosing degree and q as above.
 
     ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers;
     ``progress(degree, degree_max)`` (e.g. from ``ctx.report_progress``) is told each degree tried, and
-    ``(degree_max, degree_max)`` at the end.
+    ``(degree_max, degree_max)`` at the end. Warns (:class:`~spflow.core.errors.DegreeCapWarning`) when the selected
+    degree is the cap.
     """
     z = np.atleast_2d(np.asarray(z, dtype=float))
     y = np.asarray(y, dtype=float)
     y = y[:, None] if y.ndim == 1 else y
     qs = [float(v) for v in (q if isinstance(q, Sequence) else [q])]
-    _check(z, y, degree_max, qs, solver, target_loo)
+    _check(z, y, degree_max, qs, solver, target_loo, max_terms_ratio)
+    max_terms = max(int(max_terms_ratio * z.shape[0]), MIN_TERMS)
     history: list[tuple[int, float, int, float]] = []
     best, best_score, degree_scores = None, np.inf, []
+    stopped, cap = False, degree_max
     for degree in range(1, degree_max + 1):
-        degree_best, q_scores, last_size = np.inf, [], -1
+        degree_best, q_scores, last_size, too_big = np.inf, [], -1, []
         for qv in qs:
             indices = multi_indices(z.shape[1], degree, qv)
             if indices.shape[0] == last_size:
                 continue
             last_size = indices.shape[0]
+            if indices.shape[0] > max_terms and degree > 1:  # degree 1 (d + 1 terms) is always tried
+                too_big.append(indices.shape[0])
+                continue
             with single_threaded_blas():
                 coef, loo, modified, emp = _fit_basis(design_matrix(z, indices), y, solver, parallel)
             score = float(np.mean(modified))
@@ -147,14 +190,28 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = 5, q: float | Sequen
                 best = (indices, coef, degree, qv, loo, modified, emp)
             if len(q_scores) > 2 and min(q_scores[-2:]) >= min(q_scores[:-2]):
                 break
+        if not q_scores:  # every basis of this degree is over the size limit
+            cap = degree - 1
+            break
         degree_scores.append(degree_best)
         if progress is not None and degree < degree_max:
             progress(degree, degree_max)
-        if target_loo is not None and best_score <= target_loo:
+        if best_score <= max(EXACT_FIT, target_loo or 0.0):
+            stopped = True
             break
-        if early_stop and len(degree_scores) > 2 and min(degree_scores[-2:]) > min(degree_scores[:-2]):
+        if early_stop and len(degree_scores) > 2 and min(degree_scores[-2:]) >= min(degree_scores[:-2]):
+            stopped = True
             break
     if progress is not None:  # done, whether at degree_max or stopped early
         progress(degree_max, degree_max)
     indices, coef, degree, qv, loo, modified, emp = best
-    return PCEFit(indices, coef, degree, qv, solver, loo, modified, emp, y.var(axis=0), history)
+    message = ""
+    if not stopped and degree == cap:
+        reason = (f"degree_max = {degree_max}" if cap == degree_max else
+                  f"the basis-size limit: degree {cap + 1} needs {min(too_big)} candidate terms > "
+                  f"max(max_terms_ratio × N, {MIN_TERMS}) = {max_terms}")
+        message = (f"fit_pce: the selected degree {degree} is the largest the search could try ({reason}) and the "
+                   f"corrected LOO error was still falling; a higher degree may fit better: raise degree_max, "
+                   f"max_terms_ratio or the number of runs")
+        warnings.warn(message, DegreeCapWarning, stacklevel=2)
+    return PCEFit(indices, coef, degree, qv, solver, loo, modified, emp, y.var(axis=0), history, cap, message)

@@ -60,7 +60,7 @@ class _KrigingStage(Stage):
 
 class PCKStage(_KrigingStage):
     name = "pck"
-    version = "1"
+    version = "2"  # 2: the trend's hybrid LARS ranks by the LASSO-modified path (issue #24)
     description = "PC-Kriging proxy (universal Kriging on a hybrid-LARS Legendre trend, ML length scales)"
     params = {
         **KRIGING_PARAMS,

@@ -4,9 +4,12 @@ Stored as arrays, no pickle: ``coefficients`` (output, term), ``multi_index`` (t
 (``loo``, ``modified_loo``, ``empirical``; Eqs. 3.7-3.8) and the training outputs' population variance.
 
 Prediction: the mean is Σ_α y_α Ψ_α(z) at z = :meth:`to_unit` (x). The variance returned by :meth:`predict` is the
-LOO estimate of the proxy's squared error, ε_LOO · Var̂(y) = (1/N) Σ_i (e_i / (1 − h_i))², per output and constant in
-x — a PCE has no pointwise error model, and this is the number calibration adds to a likelihood's noise variance
-(docs/surrogates.md, The model; docs/calibration.md, The posterior). Moments (Eqs. 3.11-3.12) and Sobol indices come
+corrected LOO estimate of the proxy's squared error, ε*_LOO · Var̂(y) = T(P, N) (1/N) Σ_i (e_i / (1 − h_i))² with
+T(P, N) = N/(N − P) · (1 + tr(C_emp⁻¹)/N) (Blatman & Sudret 2011, :mod:`.degree_adaptive`), per output and constant
+in x — a PCE has no pointwise error model, and this is the number calibration adds to a likelihood's noise variance
+(docs/surrogates.md, The model; docs/calibration.md, The posterior). The plain LOO underestimates the error of a
+LARS-selected basis (the selection has seen every point; issue #24 measured 1.5-4x at N <= 100), the corrected one
+does not. Moments (Eqs. 3.11-3.12) and Sobol indices come
 from the coefficients
 (:mod:`.sobol_from_pce`), never from chaospy's symbolic ``Var``/``Sens_*``.
 """
@@ -75,15 +78,16 @@ class PCE(Surrogate):
 
     @classmethod
     def from_fit(cls, names, lower, upper, outputs, result: PCEFit, n_train: int) -> PCE:
-        info = {"degree": result.degree, "q": result.q, "solver": result.solver, "n_train": n_train}
+        info = {"degree": result.degree, "q": result.q, "solver": result.solver, "n_train": n_train,
+                "degree_cap": result.degree_cap, "degree_cap_warning": result.cap_warning}
         return cls(names, lower, upper, outputs, result.indices, result.coefficients, result.loo,
                    result.modified_loo, result.empirical, result.output_variance, info)
 
     # -- prediction ---------------------------------------------------------------------------------------------
     @property
     def error_variance(self) -> np.ndarray:
-        """Per-output LOO estimate of the proxy's squared error, ε_LOO · Var̂(y)."""
-        return self.loo * self.output_variance
+        """Per-output corrected LOO estimate of the proxy's squared error, ε*_LOO · Var̂(y)."""
+        return self.modified_loo * self.output_variance
 
     def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z = self.to_unit(x)
@@ -137,6 +141,8 @@ class PCE(Surrogate):
     @classmethod
     def from_dataset(cls, ds: xr.Dataset) -> PCE:
         info = {k: ds.attrs[k] for k in ("degree", "q", "solver", "n_train")}
+        # stores written before the degree cap was recorded (pce stage version 1) have no cap attrs
+        info.update({k: ds.attrs[k] for k in ("degree_cap", "degree_cap_warning") if k in ds.attrs})
         return cls(**cls._common(ds), indices=ds["multi_index"].values, coefficients=ds["coefficients"].values,
                    loo=ds["loo"].values, modified_loo=ds["modified_loo"].values, empirical=ds["empirical"].values,
                    output_variance=ds["output_variance"].values, info=info)

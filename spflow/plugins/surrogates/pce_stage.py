@@ -2,7 +2,9 @@
 
 Inputs: the parameter ``space`` (uniform box), the training ``design`` on it and the forward stage's ``responses`` at
 the design points. Output: the fitted surrogate Dataset (:data:`~.contract.SURROGATE`, kind ``pce``) with per-output
-``loo``, ``modified_loo`` and ``empirical`` errors and their means over outputs (ε^mean, Eqs. 3.9-3.10) in attrs.
+``loo``, ``modified_loo`` and ``empirical`` errors and their means over outputs (ε^mean, Eqs. 3.9-3.10) in attrs, with
+``degree_cap`` (the largest degree the search could try) and ``degree_cap_warning`` ("" unless the selected degree is
+that cap, :class:`~spflow.core.errors.DegreeCapWarning`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from spflow.plugins.design.schemas import DESIGN, SPACE
 from spflow.plugins.forward.stage import RESPONSE_UNITS, RESPONSES
 
 from .contract import SURROGATE
-from .degree_adaptive import SOLVERS
+from .degree_adaptive import DEGREE_MAX, MAX_TERMS_RATIO, SOLVERS
 from .pce_model import PCE
 from .training_data import training_set
 
@@ -27,7 +29,11 @@ PCE_PARAMS = {
     "variables": Param(list, ["dp", "recovery"], choices=sorted(RESPONSE_UNITS),
                        doc="response variables to approximate (each a time series on the PV grid)"),
     "experiments": Param(list, ["BCF1"], doc="experiments whose responses are approximated"),
-    "degree_max": Param(int, 5, bounds=(1, 20), doc="largest total degree p tried (thesis: 5)"),
+    "degree_max": Param(int, DEGREE_MAX, bounds=(1, 20),
+                        doc="largest total degree p tried (the thesis used 5; the search stops earlier by itself once "
+                            "two degrees in a row do not improve the corrected LOO)"),
+    "max_terms_ratio": Param(float, MAX_TERMS_RATIO, bounds=(1.0, 1000.0),
+                             doc="largest candidate basis tried, in terms per training run (never below 1000 terms)"),
     "q": Param(float, 0.9, bounds=(0.05, 1.0), doc="q-norm of the hyperbolic truncation (thesis: 0.9)"),
     "solver": Param(str, "ols", choices=list(SOLVERS), doc="OLS or hybrid LARS (sparse)"),
     "target_loo": Param(float, 0.0, bounds=(0.0, 1.0),
@@ -38,7 +44,8 @@ PCE_PARAMS = {
 def fit_options(params, ctx: StageContext) -> dict:
     """Keyword arguments of :func:`.degree_adaptive.fit_pce` from a stage's parameters (progress: degrees tried)."""
     return {"degree_max": params["degree_max"], "q": params["q"], "solver": params["solver"],
-            "target_loo": params["target_loo"], "parallel": ctx.parallel() if ctx.n_jobs > 1 else None,
+            "target_loo": params["target_loo"], "max_terms_ratio": params["max_terms_ratio"],
+            "parallel": ctx.parallel() if ctx.n_jobs > 1 else None,
             "progress": lambda degree, degree_max: ctx.report_progress(degree, degree_max, "degrees")}
 
 
@@ -53,7 +60,7 @@ def check_lists(stage: str, params) -> None:
 
 class PCEStage(Stage):
     name = "pce"
-    version = "1"
+    version = "2"  # 2: degree cap 15 + basis-size limit, corrected LOO as the error variance, degree_cap attrs
     description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
     output = SURROGATE
