@@ -6,8 +6,6 @@ result under a provenance key and runs independent work in parallel. See ``docs/
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from spflow.core.lazy_exports import lazy_exports
 from spflow.core.version import __version__
 
@@ -35,21 +33,3 @@ _EXPORTS = {
 
 __all__ = sorted([*_EXPORTS, "__version__"])
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
-
-if TYPE_CHECKING:  # what type checkers and IDEs see: the same names, imported eagerly
-    from spflow import synthetic
-    from spflow.core.errors import (CacheError, CacheIntegrityWarning, CacheWarning, ParameterError, PipelineError,
-                                    PluginError, PluginWarning, SchemaError, SpflowError, StageError)
-    from spflow.core.executor import NodeStatus, RunResult, run, status
-    from spflow.core.hashing import canonical_hash
-    from spflow.core.hookspecs import hookimpl
-    from spflow.core.params import Param
-    from spflow.core.pipeline import Pipeline
-    from spflow.core.plugins import get_registry, register_plugin, reset_registry, unregister_plugin
-    from spflow.core.runners import DaskRunner, ProcessRunner, Runner, SequentialRunner, ThreadRunner
-    from spflow.core.schema import DatasetSchema, Variable
-    from spflow.core.stage import Stage, StageContext
-    from spflow.io import load_coreflood
-    from spflow.plugins.forward.effects import Effect
-    from spflow.plugins.forward.simulate import simulate
-    from spflow.study import Study, StudyError, bundled_study, load_study

@@ -36,11 +36,13 @@ from spflow.core.console import console_logging
 from spflow.core.errors import SpflowError
 from spflow.core.executor import run, status
 from spflow.core.hashing import canonical_hash
+from spflow.core.dag_svg import dag_svg
 from spflow.core.html_report import Section, provenance_rows, sections_from, write_html_report
 from spflow.core.overrides import apply_overrides
 from spflow.core.pipeline import Pipeline
 from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
 from spflow.core.plugins import get_commands, get_registry
+from spflow.core.report_table import text_lines
 from spflow.core.runners import BACKENDS
 from spflow.study.pipeline_inputs import resolve_study, study_settings
 
@@ -118,18 +120,23 @@ def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argpa
         lines = report(result, outdir)
         for line in _flat(lines):
             print(line)
+    states = {node: "ran" if node in result.executed else "cached" if node in result.cached else "not run"
+              for node in pipe.nodes}
+    dag = dag_svg(pipe.graph(), {name: node.stage for name, node in pipe.nodes.items()}, states)
     write_html_report(html, f"spflow report: {pipe.name}", [Section("Run settings", settings),
-                                                             *sections_from(outdir, lines)], provenance_rows(result))
-    saved.write_text(json.dumps(lines))
+                                                             *sections_from(outdir, lines)], provenance_rows(result),
+                      dag=dag)
+    saved.write_text(json.dumps(_flat(lines)))
     stamp.write_text(fingerprint)
     print(f"report: {html.resolve()}")
 
 
 def _flat(lines) -> list[str]:
+    """A report's return value (lines, tables, or sections of them) as the text lines to print."""
     if isinstance(lines, dict):
         return [f"== {section}" if i == 0 else line for section, text in lines.items()
-                for i, line in enumerate([None, *text])]
-    return list(lines or [])
+                for i, line in enumerate([None, *text_lines(text)])]
+    return text_lines(lines or [])
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
