@@ -31,6 +31,7 @@ __all__ = ["Section", "sections_from", "provenance_rows", "software_versions", "
 _SOFTWARE = ("spflow", "numpy", "scipy", "xarray", "netCDF4", "pluggy", "networkx", "joblib", "numba", "chaospy",
              "SALib", "scikit-learn", "GPy", "pymoo", "moocore", "emcee", "arviz", "matplotlib")
 _WARNING = re.compile(r"^\s*WARNING\b|data reject the model|the data reject", re.IGNORECASE)
+_LEADING_WARNING = re.compile(r"^WARNING\b:?\s*", re.IGNORECASE)  # the call-out says "Warning." itself
 
 _CSS = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
@@ -175,8 +176,8 @@ def write_html_report(path: Path, title: str, sections: list[Section], provenanc
              f"<nav>{nav}<a href='#provenance'>Provenance</a><a href='#software'>Software</a></nav>"]
     for anchor, section in zip(anchors, sections):
         parts.append(f"<section id='{anchor}'><h2>{html.escape(section.title)}</h2>")
-        parts.extend(f"<p class='warning' role='alert'><strong>Warning.</strong> {html.escape(line.strip())}</p>"
-                     for line in section.lines
+        parts.extend(f"<p class='warning' role='alert'><strong>Warning.</strong> "
+                     f"{html.escape(_LEADING_WARNING.sub('', line.strip()))}</p>" for line in section.lines
                      if isinstance(line, str) and _WARNING.search(line))
         parts.extend(_section_body_html(section.lines))
         parts.extend(_figure_html(f) for f in section.figures)

@@ -111,3 +111,25 @@ def test_a_table_refuses_rows_that_do_not_fit_its_columns():
         Table(["a", "b"], [[1, 2], [3]])
     with pytest.raises(ValueError, match="2 columns but 1 units"):
         Table(["a", "b"], [], units=["m"])
+
+
+def test_a_failed_run_writes_a_report_with_the_failed_node(workdir, capsys):
+    (workdir / "pipelines" / "failtest.py").write_text(textwrap.dedent("""
+        import spflow
+
+        def pipeline():
+            p = spflow.Pipeline("failtest")
+            p.add("src", "toy_source")
+            p.add("bad", "toy_fail", inputs={"data": "src"})
+            p.add("after", "toy_scale", inputs={"data": "bad"})
+            return p
+    """))
+    assert main(["run", "failtest"]) == 2
+    assert "boom from toy_fail" in capsys.readouterr().err
+    page = Elements()
+    page.feed((workdir / "out" / "failtest" / "report.html").read_text())
+    boxes = {attrs["data-node"]: attrs["data-state"] for tag, attrs, _ in page.tags
+             if tag == "g" and attrs.get("class") == "dag-node"}
+    assert boxes == {"src": "cached", "bad": "failed", "after": "not run"}
+    failure = [attrs for tag, attrs, section in page.tags if section == "s1" and tag in ("p", "pre")]
+    assert failure[0]["class"] == "warning"
