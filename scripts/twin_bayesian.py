@@ -32,6 +32,7 @@ from pathlib import Path
 
 import spflow
 from spflow.pipelines import bayesian_calibration
+from spflow.core.report_table import text_lines
 from spflow.core.stage import StageContext
 from spflow.plugins.calibration.diagnostics import summary
 from spflow.plugins.design.parameter_map import ParameterMap
@@ -64,7 +65,7 @@ def twin_check(cache: Path, outdir: Path | None = None, jobs: int = 2, noise_see
     table = summary(posterior)
     inside = {str(n): bool(table["q025"].sel(param=n) <= TRUTH[str(n)] <= table["q975"].sel(param=n))
               for n in table["param"].values}
-    lines = bayesian_calibration.report(result, data_dir, truth=TRUTH) if outdir else []
+    lines = text_lines(bayesian_calibration.report(result, data_dir, truth=TRUTH)) if outdir else []
     return {"coverage_heldout": bayesian_calibration.held_out_coverage(bands), "truth_inside": inside,
             "geweke_z": {str(n): float(table["geweke_z"].sel(param=n)) for n in table["param"].values},
             "rhat": {str(n): float(table["rhat"].sel(param=n)) for n in table["param"].values},

@@ -33,14 +33,16 @@ from pathlib import Path
 from typing import Any
 
 from spflow.core.console import console_logging
-from spflow.core.errors import SpflowError
+from spflow.core.errors import SpflowError, StageError
 from spflow.core.executor import run, status
 from spflow.core.hashing import canonical_hash
+from spflow.core.dag_svg import dag_svg
 from spflow.core.html_report import Section, provenance_rows, sections_from, write_html_report
 from spflow.core.overrides import apply_overrides
 from spflow.core.pipeline import Pipeline
 from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
 from spflow.core.plugins import get_commands, get_registry
+from spflow.core.report_table import text_lines
 from spflow.core.runners import BACKENDS
 from spflow.study.pipeline_inputs import resolve_study, study_settings
 
@@ -118,24 +120,51 @@ def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argpa
         lines = report(result, outdir)
         for line in _flat(lines):
             print(line)
+    states = {node: "ran" if node in result.executed else "cached" if node in result.cached else "not run"
+              for node in pipe.nodes}
+    dag = dag_svg(pipe.graph(), {name: node.stage for name, node in pipe.nodes.items()}, states)
     write_html_report(html, f"spflow report: {pipe.name}", [Section("Run settings", settings),
-                                                             *sections_from(outdir, lines)], provenance_rows(result))
-    saved.write_text(json.dumps(lines))
+                                                             *sections_from(outdir, lines)], provenance_rows(result),
+                      dag=dag)
+    saved.write_text(json.dumps(_flat(lines)))
     stamp.write_text(fingerprint)
     print(f"report: {html.resolve()}")
 
 
 def _flat(lines) -> list[str]:
+    """A report's return value (lines, tables, or sections of them) as the text lines to print."""
     if isinstance(lines, dict):
         return [f"== {section}" if i == 0 else line for section, text in lines.items()
-                for i, line in enumerate([None, *text])]
-    return list(lines or [])
+                for i, line in enumerate([None, *text_lines(text)])]
+    return text_lines(lines or [])
+
+
+def _write_failure_report(pipe: Pipeline, args: argparse.Namespace, settings: list[str], error: StageError) -> None:
+    """``report.html`` of a failed run: the run settings, the failure as a warning, the DAG with the failed node,
+    the nodes whose results are in the cache and those not run."""
+    outdir = Path(args.out or Path("out") / pipe.name)
+    outdir.mkdir(parents=True, exist_ok=True)
+    stored = {r.node for r in status(pipe, cache=args.cache) if r.fresh}
+    states = {node: "failed" if node == error.node else "cached" if node in stored else "not run"
+              for node in pipe.nodes}
+    lines = [f"WARNING: the run failed: {error}",
+             f"{len(stored)} node(s) have their results in the cache (drawn as cached: computed before the failure, "
+             "in this run or an earlier one); fix the cause and run again to continue from there"]
+    html = write_html_report(outdir / "report.html", f"spflow report: {pipe.name} (failed)",
+                             [Section("Run settings", settings), Section("Failure", lines)], [],
+                             dag=dag_svg(pipe.graph(), {n: node.stage for n, node in pipe.nodes.items()}, states))
+    (outdir / ".report_key").unlink(missing_ok=True)  # never reused as an up-to-date report
+    print(f"report (failed run): {html.resolve()}", file=sys.stderr)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
     namespace, pipe, settings = _load(args)
-    result = run(pipe, cache=args.cache, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
-                 until=args.until, only=args.only, force=args.force or (), verbose=True)
+    try:
+        result = run(pipe, cache=args.cache, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
+                     until=args.until, only=args.only, force=args.force or (), verbose=True)
+    except StageError as exc:
+        _write_failure_report(pipe, args, settings, exc)
+        raise
     print(f"{pipe.name}: {len(result.executed)} node(s) executed, {len(result.cached)} from cache")
     if not (args.until or args.only):
         _write_report(namespace, pipe, result, args, settings, reuse=not result.executed)

@@ -118,6 +118,14 @@ class RunResult(Mapping):
     def __iter__(self) -> Iterator[str]:
         return iter(self.keys)
 
+    def seconds(self, node: str) -> float | None:
+        """Wall seconds of the run that computed ``node``'s stored result (from its store record, kept out of the
+        result itself so that run timing does not change a result); ``None`` if the record has no time."""
+        if node not in self.keys:
+            raise KeyError(f"node {node!r} was not part of this run; available: {sorted(self.keys)}")
+        seconds = self.store.record(self.keys[node]).get("seconds")
+        return None if seconds is None else float(seconds)
+
     def scoped(self, prefix: str) -> RunResult:
         """The results of the nodes included as ``<prefix>.<node>`` (``Pipeline.include``) under their own names,
         plus the unprefixed (shared) nodes -- what the included pipeline's own ``report`` expects."""

@@ -34,9 +34,12 @@ class SpflowHookSpecs:
 
     @hookspec
     def spflow_register_stages(self, register):
-        """Contribute stage classes: call ``register(StageSubclass)`` for each.
+        """Contribute stage classes: call ``register(StageSubclass)`` for each, or ``register("package.module:Class",
+        name="stage_name")`` to declare one without importing its module (imported when the stage is first used, and
+        then checked to be a Stage subclass with that ``name``; :mod:`spflow.core.stage_table`).
 
         .. versionadded:: 0.1
+        .. versionchanged:: 0.2 stages may be registered by reference.
         """
 
     @hookspec

@@ -36,6 +36,7 @@ from . import hashing
 from .errors import PipelineError, PluginError, PluginWarning, SchemaError
 from .hookspecs import PROJECT_NAME, SpflowHookSpecs
 from .stage import Stage
+from .stage_table import StageTable, class_path, is_reference
 
 __all__ = ["Registry", "Command", "get_registry", "get_commands", "reset_registry", "plugin_manager", "register_plugin",
            "unregister_plugin"]
@@ -53,7 +54,7 @@ _RUNTIME_PLUGINS: dict[str, object] = {}
 class Registry:
     """Everything the plugins contributed: stages, effects (forward model), surrogate kinds and who provided each."""
 
-    stages: dict[str, type[Stage]] = field(default_factory=dict)
+    stages: StageTable = field(default_factory=StageTable)
     effects: dict[str, Any] = field(default_factory=dict)
     surrogate_kinds: dict[str, type] = field(default_factory=dict)
     providers: dict[str, str] = field(default_factory=dict)
@@ -214,17 +215,28 @@ class _Notifier:
 def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Registry:
     reg = Registry(notify=_Notifier(pm, third_party))
 
-    def register_stage(cls: Any) -> None:
+    def register_stage(cls: Any, name: str | None = None) -> None:
+        if is_reference(cls):  # "module:Class": imported when the stage is first used (spflow.core.stage_table)
+            if not (isinstance(name, str) and name):
+                raise PluginError(f"spflow_register_stages: a stage registered by reference ({cls!r}) needs "
+                                  "name='<stage name>'")
+            if name in reg.stages and reg.stages.path(name) != cls:
+                raise PluginError(f"stage name {name!r} registered twice: by {reg.providers['stage:' + name]} "
+                                  f"and by {cls.partition(':')[0]}")
+            reg.stages.add(name, cls)
+            reg.providers["stage:" + name] = cls.partition(":")[0]
+            return
         if not (isinstance(cls, type) and issubclass(cls, Stage)):
-            raise PluginError(f"spflow_register_stages: expected a Stage subclass, got {cls!r}")
+            raise PluginError(f"spflow_register_stages: expected a Stage subclass or a 'module:Class' reference "
+                              f"with name=..., got {cls!r}")
         if not cls.name:
             raise PluginError(f"stage class {cls.__qualname__} has no 'name'")
-        if cls.name in reg.stages and reg.stages[cls.name] is not cls:
+        if cls.name in reg.stages and reg.stages.path(cls.name) != class_path(cls):
             raise PluginError(
                 f"stage name {cls.name!r} registered twice: by {reg.providers['stage:' + cls.name]} "
                 f"and by {_provider_name(cls)}"
             )
-        reg.stages[cls.name] = cls
+        reg.stages.add(cls.name, cls)
         reg.providers["stage:" + cls.name] = _provider_name(cls)
 
     def register_effect(effect: Any) -> None:

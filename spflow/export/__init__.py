@@ -8,6 +8,9 @@ coreflood format), ``opm_compare`` (figure and table beside spflow's curves), ``
 ``spflow compare opm``).
 """
 
-from .opm_model import export_opm
+from spflow.core.lazy_exports import lazy_exports
 
+#: Imported on first use: the deck writer reads the simulator's physics (numba), which ``spflow export --help`` and
+#: the CLI's other verbs must not load.
 __all__ = ["export_opm"]
+__getattr__, __dir__ = lazy_exports(__name__, {"export_opm": ".opm_model"})

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import spflow
+from spflow.core.report_table import Table
 from spflow.pipelines.history_matching import space_params, study_inputs
 from spflow.plugins.design.thesis_tables import TABLE_4_1
 
@@ -72,7 +73,7 @@ def pipeline(samples: int = 300, cells: int = 100, degree_max: int = 3, sampler:
     return p
 
 
-def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | None = None) -> list[str]:
+def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | None = None) -> list[str | Table]:
     """Appendix B-E figures, Figs. 4.4-4.5, the posterior and predictive Datasets, and a summary table."""
     from spflow.plugins.calibration import mcmc_figures as fig
     from spflow.plugins.calibration.diagnostics import summary
@@ -100,17 +101,22 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
     lines = [f"wrote {len(written)} figures, posterior.nc and predictive.nc to {outdir}",
              f"sampler {posterior.attrs['sampler']} ({posterior.sizes['chain']} chains x {posterior.sizes['draw']} "
              f"draws), noise {posterior.attrs['noise']}, surrogate {posterior.attrs['surrogate']}, acceptance "
-             f"{float(posterior['acceptance'].mean()):.2f}",
-             "parameter   mean        sd          95% interval              R-hat  ESS-bulk  Geweke z"
-             + ("  truth" if truth else "")]
-    for name in table["param"].values:
+             f"{float(posterior['acceptance'].mean()):.2f}"]
+    units = [str(u) for u in posterior["unit"].values] if "unit" in posterior else [""] * table.sizes["param"]
+    rows = []
+    for name, unit in zip(table["param"].values, units):
         row = table.sel(param=name)
-        inside = ""
-        if truth and name in truth:
-            inside = f"  {truth[name]:.4g} {'in' if row.q025 <= truth[name] <= row.q975 else 'OUT'}"
-        lines.append(f"{name:<10}  {float(row['mean']):<10.4g}  {float(row.sd):<10.3g}  [{float(row.q025):<9.4g}, "
-                     f"{float(row.q975):<9.4g}]  {float(row.rhat):5.3f}  {float(row.ess_bulk):8.0f}  "
-                     f"{float(row.geweke_z):+7.2f}{inside}")
+        cells = [str(name), unit, *(float(row[v]) for v in ("mean", "sd", "q025", "q975", "rhat", "ess_bulk",
+                                                            "geweke_z"))]
+        if truth:
+            known = name in truth
+            cells += [truth[name] if known else float("nan"),
+                      ("in" if row.q025 <= truth[name] <= row.q975 else "OUT") if known else ""]
+        rows.append(cells)
+    lines.append(Table(["parameter", "unit", "mean", "sd", "2.5 %", "97.5 %", "R-hat", "ESS-bulk", "Geweke z"]
+                       + (["truth", "truth in 95 %"] if truth else []), rows,
+                       units=["", "", "", "", "", "", "1", "1", "1"] + (["", ""] if truth else []),
+                       title="Posterior summary: each parameter in its unit (mean, sd and interval)"))
     for block in noise["block"].values:
         row = noise.sel(block=block)
         lines.append(f"noise sigma {block}: {float(row['mean']):.4g} (95% [{float(row.q025):.4g}, "

@@ -49,6 +49,7 @@ def report(result: spflow.RunResult, outdir: Path) -> list[str]:
     lines = [f"verdict: {info['verdict']}; ambiguity set {info['ambiguity_set']}; final model {info['final_model']}"]
     lines += [f"  effect {e['name']}: fitted strength {e['strength']:.4g}" for e in info["effects"]]
     lines.append(f"  gap closed: calibration {info['gap_closed']['calibration']}, held-out "
-                 f"{info['gap_closed']['heldout']}; {info['forward_runs']} forward runs, {info['wall_time_s']:.0f} s")
+                 f"{info['gap_closed']['heldout']}; {info['forward_runs']} forward runs, "
+                 + (f"{seconds:.0f} s" if (seconds := result.seconds("diagnosis")) is not None else "time not recorded"))
     lines.append(f"wrote {outdir / 'gap_report.nc'}, {outdir / 'summary.json'} and {len(figures)} figures")
     return lines

@@ -37,6 +37,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import spflow
+from spflow.core.report_table import Table
 from spflow.plugins.design.thesis_tables import TABLE_3_2
 from spflow.study.pipeline_inputs import StudyInputs
 
@@ -107,7 +108,7 @@ def pipeline(samples: int = 200, cells: int = 100, generations: int = 100, popul
     return p
 
 
-def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | None = None) -> list[str]:
+def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | None = None) -> list[str | Table]:
     """Figs. 3.10-3.14, the calibration Dataset, and a summary (σ_loss, misfits, ranges, node timings)."""
     from spflow.plugins.calibration.pareto_figures import plot_fronts, plot_history_match, plot_parameter_ranges
 
@@ -131,13 +132,15 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
                  f"{cal.attrs['sigma_loss_consistent']:.4f} (whole front, Algorithm 3: {cal.attrs['sigma_loss_final']:.4f})")
     if "front_outside_region_warning" in cal.attrs:
         lines.append(f"note: {cal.attrs['front_outside_region_warning']}")
-    lines.append(f"parameter   prior range               calibrated (Pareto)       noise-consistent "
-                 f"({cal.attrs['confidence_level']:.0%} likelihood-ratio region)")
-    for name in cal["param"].values:
-        c = cal.sel(param=name)
-        lines.append(f"{name:<10}  [{float(c.prior_lower):<9.4g}, {float(c.prior_upper):<9.4g}]  "
-                     f"[{float(c.calibrated_lower):<9.4g}, {float(c.calibrated_upper):<9.4g}]  "
-                     f"[{float(c.confidence_lower):<9.4g}, {float(c.confidence_upper):<9.4g}]")
+    level = f"{cal.attrs['confidence_level']:.0%}"
+    lines.append(Table(
+        ["parameter", "unit", "prior low", "prior high", "Pareto low", "Pareto high", f"noise-consistent low ({level})",
+         f"noise-consistent high ({level})"],
+        [[str(name), str(unit), *(float(cal[v].sel(param=name)) for v in (
+            "prior_lower", "prior_upper", "calibrated_lower", "calibrated_upper", "confidence_lower",
+            "confidence_upper"))] for name, unit in zip(cal["param"].values, cal["param_unit"].values)],
+        title=f"Parameter ranges: prior, calibrated (Pareto set) and noise-consistent ({level} likelihood-ratio "
+              "region); each row in its parameter's unit"))
     if "confidence_warning" in cal.attrs:
         lines.append(f"noise-consistent ranges: {cal.attrs['confidence_warning']}")
     if cal.attrs.get("undetermined_warning"):

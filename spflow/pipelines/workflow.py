@@ -99,7 +99,7 @@ def _proxy_report(result: spflow.RunResult, outdir: Path) -> list[str]:
     return lines
 
 
-def report(result: spflow.RunResult, outdir: Path) -> dict[str, list[str]]:
+def report(result: spflow.RunResult, outdir: Path) -> dict[str, list]:
     """One section per part (sub-directories of ``outdir``), each written by that part's own report."""
     sections = {}
     for prefix, module in (("screening", screening), ("hm", history_matching), ("bc", bayesian_calibration),

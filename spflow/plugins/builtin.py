@@ -5,38 +5,45 @@ from __future__ import annotations
 from spflow.core.hookspecs import hookimpl
 
 
+#: Built-in stages by name and reference: ``spflow list`` and a run import only the stage modules they use.
+STAGES = {
+    "load_netcdf": "spflow.plugins.data:LoadNetCDF",
+    "observations": "spflow.plugins.observations:Observations",
+    "parameter_space": "spflow.plugins.design.parameter_space:ParameterSpace",
+    "lhs_design": "spflow.plugins.design.latin_hypercube:LatinHypercubeDesign",
+    "forward": "spflow.plugins.forward.stage:Forward",
+    "quantiles": "spflow.plugins.statistics.quantiles:Quantiles",
+    "sobol_screening": "spflow.plugins.screening.sobol_screening:SobolScreening",
+    "morris_screening": "spflow.plugins.screening.morris_screening:MorrisScreening",
+    "selected_space": "spflow.plugins.screening.selected_space:SelectedSpace",
+    "pce": "spflow.plugins.surrogates.pce_stage:PCEStage",
+    "adaptive_pce": "spflow.plugins.surrogates.adaptive_design:AdaptivePCE",
+    "surrogate_validation": "spflow.plugins.surrogates.validation:SurrogateValidation",
+    "pck": "spflow.plugins.surrogates.kriging_stage:PCKStage",
+    "gp": "spflow.plugins.surrogates.kriging_stage:GPStage",
+    "nsga2_calibration": "spflow.plugins.calibration.nsga2_stage:NSGA2Calibration",
+    "pareto_design": "spflow.plugins.calibration.nsga2_pareto_design:ParetoDesign",
+    "emcee_sampler": "spflow.plugins.calibration.emcee_sampler:EmceeSampler",
+    "mh_sampler": "spflow.plugins.calibration.mh_sampler:MHSampler",
+    "posterior_predictive": "spflow.plugins.calibration.posterior_predictive:PosteriorPredictive",
+    "diagnose": "spflow.plugins.gap.stage:Diagnose",
+    "fit_polymer_rheology": "spflow.plugins.lab.polymer_fit_stages:FitPolymerRheology",
+    "fit_polymer_coreflood": "spflow.plugins.lab.polymer_fit_stages:FitPolymerCoreflood",
+    "fit_adsorption": "spflow.plugins.lab.polymer_fit_stages:FitAdsorption",
+    "fit_tracer": "spflow.plugins.lab.polymer_fit_stages:FitTracer",
+    "fit_phase_behaviour": "spflow.plugins.lab.surfactant_fit_stages:FitPhaseBehaviour",
+    "fit_ift": "spflow.plugins.lab.surfactant_fit_stages:FitIFT",
+    "fit_me_viscosity": "spflow.plugins.lab.surfactant_fit_stages:FitMEViscosity",
+    "fit_desaturation": "spflow.plugins.lab.surfactant_fit_stages:FitDesaturation",
+    "priors": "spflow.plugins.lab.priors:Priors",
+    "slug_design": "spflow.plugins.slug_design.stage:SlugDesign",
+}
+
+
 @hookimpl
 def spflow_register_stages(register):
-    from spflow.plugins.calibration.emcee_sampler import EmceeSampler
-    from spflow.plugins.calibration.mh_sampler import MHSampler
-    from spflow.plugins.calibration.nsga2_pareto_design import ParetoDesign
-    from spflow.plugins.calibration.nsga2_stage import NSGA2Calibration
-    from spflow.plugins.calibration.posterior_predictive import PosteriorPredictive
-    from spflow.plugins.data import LoadNetCDF
-    from spflow.plugins.design.latin_hypercube import LatinHypercubeDesign
-    from spflow.plugins.design.parameter_space import ParameterSpace
-    from spflow.plugins.forward.stage import Forward
-    from spflow.plugins.gap.stage import Diagnose
-    from spflow.plugins.lab.polymer_fit_stages import FitAdsorption, FitPolymerCoreflood, FitPolymerRheology, FitTracer
-    from spflow.plugins.lab.surfactant_fit_stages import FitDesaturation, FitIFT, FitMEViscosity, FitPhaseBehaviour
-    from spflow.plugins.lab.priors import Priors
-    from spflow.plugins.observations import Observations
-    from spflow.plugins.screening.morris_screening import MorrisScreening
-    from spflow.plugins.slug_design.stage import SlugDesign
-    from spflow.plugins.screening.selected_space import SelectedSpace
-    from spflow.plugins.screening.sobol_screening import SobolScreening
-    from spflow.plugins.statistics.quantiles import Quantiles
-    from spflow.plugins.surrogates.adaptive_design import AdaptivePCE
-    from spflow.plugins.surrogates.kriging_stage import GPStage, PCKStage
-    from spflow.plugins.surrogates.pce_stage import PCEStage
-    from spflow.plugins.surrogates.validation import SurrogateValidation
-
-    for stage in (LoadNetCDF, Observations, ParameterSpace, LatinHypercubeDesign, Forward, Quantiles,
-                  SobolScreening, MorrisScreening, SelectedSpace, PCEStage, AdaptivePCE, SurrogateValidation,
-                  PCKStage, GPStage, NSGA2Calibration, ParetoDesign, EmceeSampler, MHSampler, PosteriorPredictive,
-                  Diagnose, FitPolymerRheology, FitPolymerCoreflood, FitAdsorption, FitTracer, FitPhaseBehaviour,
-                  FitIFT, FitMEViscosity, FitDesaturation, Priors, SlugDesign):
-        register(stage)
+    for name, reference in STAGES.items():
+        register(reference, name=name)
 
 
 @hookimpl

@@ -41,7 +41,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.io.observed_source import load_observed, source_label
 from spflow.io.format import VARIABLES
 from spflow.plugins.forward.schedule import as_schedule
-from spflow.plugins.forward.simulate import common_grid, output_grid
+from spflow.plugins.forward.run_arguments import common_grid, output_grid
 
 __all__ = ["Observations", "OBSERVATIONS", "at_core_outlet", "dead_volume_pv", "on_simulator_grid"]
 

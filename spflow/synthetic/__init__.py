@@ -5,8 +5,12 @@
 :mod:`.core_volumes` and :mod:`.measurement` (which chains them).
 """
 
-from .measurement import measure
-from .noise_model import NoiseModel
-from .twin import make_coreflood, write_twins
+from spflow.core.lazy_exports import lazy_exports
 
-__all__ = ["NoiseModel", "make_coreflood", "measure", "write_twins"]
+#: Imported on first use: ``make_coreflood`` runs the simulator (numba), which readers of corefloods
+#: (:mod:`spflow.io`, importing :class:`NoiseModel`) must not load.
+_EXPORTS = {"NoiseModel": ".noise_model", "make_coreflood": ".twin", "measure": ".measurement",
+            "write_twins": ".twin"}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -3,6 +3,7 @@ problem whose Pareto set is known analytically, bad input, and cache reuse in a 
 
 import numpy as np
 import pytest
+import xarray as xr
 
 import spflow
 from spflow.core.errors import ParameterError
@@ -256,6 +257,27 @@ def test_pareto_design_collects_the_stored_fronts(space, bundled):
     assert design.sizes["sample"] == int(cal["front_size"].sel(snapshot=[1, 8]).sum())
     with pytest.raises(ParameterError, match="stored generations"):
         ParetoDesign(generations=[5]).run(CTX, calibration=cal)
+
+
+def _stored_fronts(fronts: dict[int, list[list[float]]]) -> xr.Dataset:
+    """A calibration Dataset holding only what pareto_design reads: fronts NaN-padded to one member length."""
+    width = max(len(f) for f in fronts.values())
+    padded = [f + [[np.nan, np.nan]] * (width - len(f)) for f in fronts.values()]
+    return xr.Dataset({"front_designs": (("snapshot", "member", "param"), np.array(padded, dtype=float)),
+                       "front_size": ("snapshot", np.array([len(f) for f in fronts.values()])),
+                       "param_unit": ("param", ["1", "1"])},
+                      coords={"snapshot": list(fronts), "param": ["a", "b"]})
+
+
+def test_pareto_design_drops_padding_and_refuses_a_nan_member():
+    cal = _stored_fronts({1: [[0.1, 0.2]], 4: [[0.3, 0.4], [0.5, 0.6], [0.7, 0.8]]})
+    design = ParetoDesign(generations=[1, 4]).run(CTX, calibration=cal)
+    np.testing.assert_array_equal(design["values"].values, [[0.1, 0.2], [0.3, 0.4], [0.5, 0.6], [0.7, 0.8]])
+    np.testing.assert_array_equal(design["generation"].values, [1, 4, 4, 4])
+    broken = _stored_fronts({1: [[0.1, 0.2]], 4: [[0.3, 0.4], [0.5, np.nan], [0.7, 0.8]]})
+    ParetoDesign(generations=[1]).run(CTX, calibration=broken)  # snapshot 1 is intact
+    with pytest.raises(ParameterError, match=r"snapshot 4, member 1 is not finite in \['b'\]"):
+        ParetoDesign(generations=[0]).run(CTX, calibration=broken)
 
 
 def test_heldout_misfit_is_the_relative_l2_error_of_the_simulator(space, bundled):

@@ -18,8 +18,8 @@ def test_long_lines_wrap_and_warnings_are_highlighted_and_escaped(tmp_path):
     text = _report(tmp_path, ["plain line", LONG, "WARNING: <b>HBNC71</b> undetermined", "no warning here"])
     pre_rule = re.search(r"pre \{[^}]*\}", text).group(0)
     assert "white-space: pre-wrap" in pre_rule and "overflow-x: auto" not in pre_rule
-    warnings = re.findall(r"<p class='warning'>(.*?)</p>", text)
-    assert warnings == [LONG, "WARNING: &lt;b&gt;HBNC71&lt;/b&gt; undetermined"]
+    warnings = re.findall(r"<p class='warning' role='alert'><strong>Warning.</strong> (.*?)</p>", text)
+    assert warnings == [LONG, "&lt;b&gt;HBNC71&lt;/b&gt; undetermined"]
     assert "<b>HBNC71</b>" not in text
     assert LONG in text  # still in the section's text as well
 

@@ -22,7 +22,6 @@ uniform draws (cheap on a surrogate).
 
 from __future__ import annotations
 
-import emcee
 import numpy as np
 
 from spflow.core.errors import ParameterError
@@ -35,8 +34,8 @@ from .mcmc_stage import ChainResult, SamplerStage
 __all__ = ["EmceeSampler", "initial_points"]
 
 _MOVES = {
-    "stretch": lambda: emcee.moves.StretchMove(),
-    "de_snooker": lambda: [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)],
+    "stretch": lambda moves: moves.StretchMove(),
+    "de_snooker": lambda moves: [(moves.DEMove(), 0.8), (moves.DESnookerMove(), 0.2)],
 }
 
 
@@ -98,7 +97,10 @@ class EmceeSampler(SamplerStage):
         rng = np.random.default_rng(seed)
         burn, keep = self._iterations(walkers)
         start = initial_points(model, walkers, p["init"], p["init_draws"], rng)
-        sampler = emcee.EnsembleSampler(walkers, model.ndim, model, moves=_MOVES[p["moves"]](), vectorize=True,
+        import emcee
+
+        sampler = emcee.EnsembleSampler(walkers, model.ndim, model, moves=_MOVES[p["moves"]](emcee.moves),
+                                        vectorize=True,
                                         blobs_dtype=float)
         sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
         state = sampler.run_mcmc(start, burn) if burn else start

@@ -29,7 +29,6 @@ import numpy as np
 from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.contract import Surrogate
 
-from . import jeffreys
 from .aligned_data import AlignedData
 
 __all__ = ["NOISE_MODES", "PosteriorModel"]
@@ -103,6 +102,8 @@ class PosteriorModel:
 
     def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(log posterior, log likelihood), each (rows,), at coordinates ``x`` (rows, ndim); −inf outside the box."""
+        from . import jeffreys  # numba kernels: compiled when a posterior is evaluated, not when spflow lists stages
+
         x = np.atleast_2d(np.asarray(x, dtype=float))
         log_post = np.full(x.shape[0], -np.inf)
         log_lik = np.full(x.shape[0], -np.inf)
@@ -140,6 +141,8 @@ class PosteriorModel:
             return np.exp(x[:, self.n_theta:])
         if self.noise == "known":
             return np.tile(np.asarray(self.sigma, dtype=float), (x.shape[0], 1))
+        from . import jeffreys
+
         out = np.empty((x.shape[0], len(self.pairs)))
         for i, (r, v) in enumerate(self._blocks(x[:, : self.n_theta])):
             out[:, i] = jeffreys.sample_sigma(r, 0.0 if v is None else v, rng)

@@ -17,7 +17,6 @@ Budget as the thesis: ``samples`` steps per chain, ``burn`` discarded, every ``t
 
 from __future__ import annotations
 
-import emcee
 import numpy as np
 
 from spflow.core.errors import ParameterError
@@ -82,6 +81,8 @@ class MHSampler(SamplerStage):
         chains = len(seeds)
         width = np.concatenate([model.upper - model.lower, np.ones(model.ndim - model.n_theta)])
         proposal = GaussianProposal(np.tile(np.diag(p["initial_scale"] * width), (chains, 1, 1)))
+        import emcee
+
         sampler = emcee.EnsembleSampler(chains, model.ndim, model, moves=emcee.moves.MHMove(proposal), vectorize=True,
                                         blobs_dtype=float)
         sampler.random_state = np.random.RandomState(int(rngs[0].integers(2**32))).get_state()

@@ -30,10 +30,6 @@ Notes on the mapping:
 
 from __future__ import annotations
 
-from pymoo.algorithms.moo.nsga2 import NSGA2
-from pymoo.operators.crossover.sbx import SBX
-from pymoo.operators.mutation.pm import PM
-from pymoo.operators.selection.tournament import TournamentSelection
 
 from spflow.plugins.calibration.tournament import crowded_tournament
 
@@ -44,8 +40,13 @@ THESIS_GA = {"pop_size": 120, "tournament": 4, "crossover_prob": 0.8, "mutation_
 
 
 def thesis_nsga2(pop_size: int = 120, tournament: int = 4, crossover_prob: float = 0.8, mutation_prob: float = 0.01,
-                 crossover_eta: float = 15.0, mutation_eta: float = 20.0) -> NSGA2:
+                 crossover_eta: float = 15.0, mutation_eta: float = 20.0):
     """A pymoo NSGA-II with the thesis's selection, crossover and mutation settings (mapping in the module doc)."""
+    from pymoo.algorithms.moo.nsga2 import NSGA2  # pymoo loads when an optimisation is built
+    from pymoo.operators.crossover.sbx import SBX
+    from pymoo.operators.mutation.pm import PM
+    from pymoo.operators.selection.tournament import TournamentSelection
+
     return NSGA2(
         pop_size=pop_size,
         selection=TournamentSelection(pressure=tournament, func_comp=crowded_tournament),

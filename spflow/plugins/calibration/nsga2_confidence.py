@@ -38,7 +38,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
-from scipy import stats
 
 from spflow.core.errors import ParameterError
 from spflow.plugins.calibration.aligned_data import AlignedData
@@ -131,6 +130,8 @@ def region_extent(chi2: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, u
             best_u, best = np.clip(res.x, 0.0, 1.0), float(res.fun)
     chi2_min = min(best, float(values.min()))
     best_x = to_x(best_u) if best <= values.min() else archive[int(np.argmin(values))]
+    from scipy import stats
+
     threshold = float(stats.chi2.ppf(level, df=len(lower)))
     limit = chi2_min + threshold
     inside = (archive - lower) / width

@@ -6,6 +6,11 @@ generations, which always include the last one) into a ``design`` Dataset (dims 
 ``generation`` coordinate on ``sample`` telling which front each point belongs to, so one ordinary ``forward`` node
 simulates them all — cached, and parallel over every point at once. The design carries the calibration's parameter
 map (which UTCHEM names each column sets).
+
+``front_designs`` stores fronts of different sizes NaN-padded to a common ``member`` length: the members after a
+snapshot's ``front_size`` are padding and are dropped; a NaN inside the first ``front_size`` members is a broken
+calibration and is refused (:class:`~spflow.core.errors.ParameterError` naming the snapshot and the member) before it
+can reach the design.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ __all__ = ["ParetoDesign"]
 
 class ParetoDesign(Stage):
     name = "pareto_design"
-    version = "2"
+    version = "3"
     description = "the Pareto sets of an nsga2_calibration at stored generations, as one design"
     inputs = {"calibration": NSGA2_CALIBRATION}
     output = DESIGN
@@ -41,12 +46,25 @@ class ParetoDesign(Stage):
         if missing or not wanted:
             raise ParameterError(f"stage 'pareto_design' parameter 'generations' = {self.params['generations']}: "
                                  f"{missing or 'none'} not stored; stored generations: {stored} (0 = the last)")
-        fronts = []
-        for g in wanted:
-            snap = calibration.sel(snapshot=g)
-            fronts.append(snap["front_designs"].values[: int(snap["front_size"])])
+        fronts = [_front(calibration, g) for g in wanted]
         values = np.concatenate(fronts)
         return ParameterMap.of(calibration).design(
             values, attrs={"design": f"Pareto sets of generations {wanted}"},
             param_unit=("param", calibration["param_unit"].values),
             generation=("sample", np.repeat(wanted, [len(f) for f in fronts])))
+
+
+def _front(calibration: xr.Dataset, generation: int) -> np.ndarray:
+    """The Pareto set stored for snapshot ``generation``: its first ``front_size`` members (the rest is NaN padding),
+    each of them finite."""
+    snap = calibration.sel(snapshot=generation)
+    size = int(snap["front_size"])
+    front = np.asarray(snap["front_designs"].values[:size], dtype=float)
+    bad = np.flatnonzero(~np.isfinite(front).all(axis=1))
+    if bad.size:
+        member = int(bad[0])
+        params = [str(p) for p, ok in zip(calibration["param"].values, np.isfinite(front[member])) if not ok]
+        raise ParameterError(f"stage 'pareto_design' input 'calibration': 'front_designs' at snapshot {generation}, "
+                             f"member {member} is not finite in {params} ({bad.size} such member(s) of the "
+                             f"{size} in that front); NaN is allowed only as the padding after 'front_size'")
+    return front

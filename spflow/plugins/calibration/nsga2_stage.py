@@ -36,10 +36,10 @@ log10 of the value, :mod:`spflow.plugins.design.parameter_map`) is carried along
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import xarray as xr
-from scipy import stats
-from pymoo.optimize import minimize
 
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
@@ -48,8 +48,6 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.calibration.nsga2_algorithm import THESIS_GA, thesis_nsga2
 from spflow.plugins.calibration.nsga2_confidence import ConfidenceRegion, NoiseMisfit, check_level
 from spflow.plugins.calibration.nsga2_heldout import HeldOutCheck
-from spflow.plugins.calibration.nsga2_history import HV_REFERENCE, CalibrationHistory
-from spflow.plugins.calibration.nsga2_problem import SurrogateMisfitProblem
 from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward import effects as forward_effects
@@ -59,6 +57,9 @@ from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.observations import OBSERVATIONS
 from spflow.plugins.surrogates.contract import SURROGATE, load_surrogate
+
+if TYPE_CHECKING:
+    from spflow.plugins.calibration.nsga2_history import CalibrationHistory
 
 __all__ = ["NSGA2Calibration", "NSGA2_CALIBRATION"]
 
@@ -180,6 +181,11 @@ class NSGA2Calibration(Stage):
                                pv_step=p["pv_step"])
 
     def run(self, ctx: StageContext, surrogate: xr.Dataset, observations: xr.Dataset, space: xr.Dataset) -> xr.Dataset:
+        from pymoo.optimize import minimize  # pymoo (and SciPy's optimisers) load when a calibration runs
+
+        from spflow.plugins.calibration.nsga2_history import CalibrationHistory
+        from spflow.plugins.calibration.nsga2_problem import SurrogateMisfitProblem
+
         p = self.params
         model = load_surrogate(surrogate)
         names = [str(n) for n in space["param"].values]
@@ -264,6 +270,8 @@ class NSGA2Calibration(Stage):
         """``ds`` with the noise-consistent ranges and their definition (attrs ``confidence_*``)."""
         per_param = {"units": _PER_PARAM}
         dof = noise.n_data - ds.sizes["param"]
+        from scipy import stats
+
         fit_pvalue = float(stats.chi2.sf(region.chi2_min, dof)) if dof > 0 else float("nan")
         ds = ds.assign(confidence_lower=("param", region.lower, per_param),
                        confidence_upper=("param", region.upper, per_param),
@@ -293,6 +301,8 @@ class NSGA2Calibration(Stage):
 
     def _dataset(self, history: CalibrationHistory, names: list[str], space: xr.Dataset,
                  objective_units: list[str]) -> xr.Dataset:
+        from spflow.plugins.calibration.nsga2_history import HV_REFERENCE
+
         p = self.params
         last = history.last_generation
         designs, objectives = history.fronts[last]

@@ -4,7 +4,6 @@ design carries the space's parameter map (:mod:`.parameter_map`: which UTCHEM na
 from __future__ import annotations
 
 import xarray as xr
-from scipy.stats import qmc
 
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
@@ -26,6 +25,8 @@ class LatinHypercubeDesign(Stage):
 
     def run(self, ctx: StageContext, space: xr.Dataset) -> xr.Dataset:
         opt = None if self.params["optimization"] == "none" else self.params["optimization"]
+        from scipy.stats import qmc  # SciPy's statistics load when a design is drawn
+
         sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"], optimization=opt)
         unit = sampler.random(self.params["samples"])
         values = qmc.scale(unit, space["lower"].values, space["upper"].values)

@@ -16,9 +16,7 @@ from . import effects as E
 from . import state_layout as L
 from .errors import SimulationError
 from .budgets import resolve_budgets, wall_clock_flag
-from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_RAMP, run_kernel
 from .kernel_inputs import build_kernel_params, slug_flow
-from .outputs import build_dataset
 from .run_arguments import CAPILLARY, SCHEMES, common_grid, output_grid, validate_run
 
 __all__ = ["simulate", "output_grid", "common_grid"]
@@ -118,6 +116,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
     max_steps, max_wall_s = resolve_budgets(max_steps, max_wall_s, sched.total_pv, cells, cfl)
+    from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_RAMP, run_kernel  # numba: imported when a run starts
+    from .outputs import build_dataset
+
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
     start = time.perf_counter()
     with wall_clock_flag(max_wall_s) as stop:

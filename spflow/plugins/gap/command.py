@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 import tomllib
 from pathlib import Path
 
@@ -108,7 +109,9 @@ def main(args: argparse.Namespace) -> int:
         calibration, heldout = list(args.observations), list(args.heldout)
     stage = Diagnose(calibration=calibration, heldout=heldout, base=config, catalogue=catalogue, **options)
     ctx = StageContext("diagnose", n_jobs=args.jobs)
+    start = time.perf_counter()
     diag = stage.diagnosis(ctx)
+    seconds = time.perf_counter() - start  # shown, not stored in the report: two identical runs give one report
     report = report_dataset(diag)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -128,7 +131,8 @@ def main(args: argparse.Namespace) -> int:
     if tried:
         lines.append("  tried, not declared: " + ", ".join(f"{t['name']} ({t['strength']:.3g})" for t in tried))
     closed = result["gap_closed"]
-    lines.append(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}")
+    lines.append(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}; "
+                 f"{result['forward_runs']} forward runs, {seconds:.0f} s")
     if args.next_experiment:
         proposal = propose_next_experiment(diag, out, parallel=ctx.parallel() if args.jobs > 1 else None)
         lines += proposal.lines() if proposal else ["next experiment: none proposed (no ambiguity set of two or "

@@ -61,7 +61,7 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.parameters import resolve_params
-from spflow.plugins.forward.simulate import output_grid
+from spflow.plugins.forward.run_arguments import output_grid
 from spflow.synthetic.core_volumes import pore_volume_ml
 
 from .base_model import BaseModel

@@ -24,7 +24,7 @@ from spflow.core.errors import ParameterError
 from spflow.io import load_coreflood
 from spflow.io.metadata import core_params
 from spflow.plugins.forward.schedule import Schedule, as_schedule
-from spflow.plugins.forward.simulate import common_grid, output_grid
+from spflow.plugins.forward.run_arguments import common_grid, output_grid
 from spflow.plugins.observations import on_simulator_grid
 from spflow.synthetic import NoiseModel
 

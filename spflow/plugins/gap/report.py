@@ -38,7 +38,7 @@ import numpy as np
 import xarray as xr
 
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.forward.simulate import common_grid
+from spflow.plugins.forward.run_arguments import common_grid
 
 from .diagnosis import GapDiagnosis, ModelView
 from .localisation import Cell
@@ -332,7 +332,6 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         "cells": g.base.cells,
         "pv_step": g.options.pv_step,
         "noise_from_data": json.dumps({e.name: e.noise_from_data for e in experiments}),
-        "wall_time_s": g.wall_time_s,
         "forward_runs": g.forward_runs,
         "rule": json.dumps(dataclasses.asdict(g.options.rule)),
     }
@@ -417,6 +416,5 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
                                      "fraction_of_range": _f(r["shift_fraction"][i]),
                                      "units": str(r["param_units"].values[i])}
                             for i, p in enumerate(r["param"].values)},
-        "wall_time_s": _f(r.attrs["wall_time_s"]),
         "forward_runs": int(r.attrs["forward_runs"]),
     }

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import sys
 
+from typing import TYPE_CHECKING
+
 import xarray as xr
-from scipy.stats import chi2
 
 from spflow.core.errors import ParameterError
 from spflow.core.hashing import canonical_hash
@@ -23,14 +24,13 @@ from spflow.io.observed_source import load_observed, source_label
 from spflow.plugins.design.schemas import DESIGN
 from spflow.plugins.forward.numba_cache import source_digest
 
-from .base_calibration import parameter_set_starts
 from .base_model import TABLE_3_2_BASE, BaseModel
 from .catalogue import candidates_for
-from .diagnosis import GapDiagnosis, Options, diagnose
-from .numerical_error import DEFAULT_VARIANTS
 from .observed import MEASURABLE
-from .report import report_dataset
 from .verdict import Rule
+
+if TYPE_CHECKING:
+    from .diagnosis import GapDiagnosis, Options
 
 __all__ = ["Diagnose", "GAP_REPORT", "OPTION_PARAMS", "options_from"]
 
@@ -84,6 +84,11 @@ OPTION_PARAMS = {
 def options_from(values: dict) -> Options:
     """:class:`Options` from validated option parameters (the calibration likelihood-ratio threshold of the
     decision rule is the chi^2_1 quantile at ``alpha``)."""
+    from scipy.stats import chi2  # the diagnosis's modules load when a diagnosis is set up, not when stages are listed
+
+    from .diagnosis import Options
+    from .numerical_error import DEFAULT_VARIANTS
+
     rule = Rule(values["min_delta"], values["se_factor"], values["closed_fraction"],
                 float(chi2.isf(values["alpha"], 1)))
     keep = {k: v for k, v in values.items()
@@ -95,7 +100,7 @@ def options_from(values: dict) -> Options:
 
 class Diagnose(Stage):
     name = "diagnose"
-    version = "4"
+    version = "5"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
@@ -143,10 +148,15 @@ class Diagnose(Stage):
         return canonical_hash(self._load())
 
     def run(self, ctx: StageContext, calibrated: xr.Dataset | None = None) -> xr.Dataset:
+        from .report import report_dataset
+
         return report_dataset(self.diagnosis(ctx, calibrated))
 
     def diagnosis(self, ctx: StageContext, calibrated: xr.Dataset | None = None) -> GapDiagnosis:
         """The whole :class:`~spflow.plugins.gap.diagnosis.GapDiagnosis` (``run`` returns its report Dataset)."""
+        from .base_calibration import parameter_set_starts
+        from .diagnosis import diagnose
+
         cal, held = self._load()
         sets = None if calibrated is None else parameter_set_starts(self.base_model, calibrated)
 

@@ -22,15 +22,9 @@ from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
-from numba import njit
 
 from spflow.plugins.forward import units
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.forward.physics.adsorption import langmuir_a, retardation
-from spflow.plugins.forward.physics.effective_salinity import (
-    phase_behaviour_effective_salinity,
-    polymer_effective_salinity,
-)
 
 from .fit_result import FitError, fit_least_squares
 from .lab_table import lab_meta
@@ -59,6 +53,11 @@ def columns(component: str) -> dict[str, tuple[str, ...]]:
 
 def effective_salinity(component: str, tds_ppm, fixed: Mapping[str, float] | None = None) -> np.ndarray:
     """Effective salinity (meq/ml) the simulator sees for a brine of ``tds_ppm`` (forward-model TDS conversion)."""
+    from spflow.plugins.forward.physics.effective_salinity import (
+        phase_behaviour_effective_salinity,
+        polymer_effective_salinity,
+    )
+
     p = {s.name: s.default for s in PARAMETERS} | dict(fixed or {})
     tds = np.asarray(tds_ppm, dtype=float)
     c51, c61 = units.tds_ppm_to_anions(tds), units.tds_ppm_to_divalent(tds)
@@ -67,20 +66,13 @@ def effective_salinity(component: str, tds_ppm, fixed: Mapping[str, float] | Non
     return phase_behaviour_effective_salinity(c51, p["BETA6"], p["F6S"])
 
 
-@njit(cache=True)
-def _isotherm_loop(conc, cse, a1, a2, b):
-    out = np.empty(conc.size)
-    for i in range(conc.size):
-        a = langmuir_a(a1, a2, cse[i], 0.0, 1.0)
-        out[i] = conc[i] * retardation(a, b, conc[i])
-    return out
-
-
 def isotherm(conc, cse, a1: float, a2: float, b: float) -> np.ndarray:
     """Adsorbed concentration (PV units) ``C a/(1 + b C)``, ``a = a1 + a2 C_SE`` (Eqs. 2.15-2.16)."""
+    from .lab_kernels import isotherm_loop  # numba: compiled on first use, not when the stage is declared
+
     c, s = np.broadcast_arrays(np.asarray(conc, dtype=float), np.asarray(cse, dtype=float))
-    return _isotherm_loop(np.ascontiguousarray(c.ravel()), np.ascontiguousarray(s.ravel()),
-                          float(a1), float(a2), float(b)).reshape(c.shape)
+    return isotherm_loop(np.ascontiguousarray(c.ravel()), np.ascontiguousarray(s.ravel()),
+                         float(a1), float(a2), float(b)).reshape(c.shape)
 
 
 def _pv_factor(data: xr.Dataset, component: str) -> float:

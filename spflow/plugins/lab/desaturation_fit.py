@@ -20,7 +20,6 @@ import numpy as np
 import xarray as xr
 
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.forward.physics.trapping import residual_saturation
 from spflow.plugins.lab.fit_result import FitError, fit_least_squares
 from spflow.plugins.lab.lab_table import lab_meta, read_lab_table
 
@@ -44,6 +43,8 @@ def phase_names(phase: int) -> tuple[str, str, str]:
 
 def desaturation_model(capillary_number, t_l: float, s_low: float, s_high: float) -> np.ndarray:
     """Eq. 2.12 (without ``min(S_l, .)``) at each capillary number via the forward model's kernel."""
+    from spflow.plugins.forward.physics.trapping import residual_saturation
+
     n = np.asarray(capillary_number, dtype=float)
     return np.array([residual_saturation(s_low, s_high, t_l, x, TAU) for x in n.ravel()]).reshape(n.shape)
 

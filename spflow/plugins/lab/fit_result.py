@@ -29,7 +29,6 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import xarray as xr
-from scipy import optimize, stats
 
 from spflow.core.errors import SpflowError
 from spflow.core.schema import DatasetSchema, Variable
@@ -192,6 +191,8 @@ def fit_least_squares(
 
 def _least_squares(fun, x0, lo, hi):
     """The one least-squares call of this module (trust-region reflective, 3-point Jacobian, tight tolerances)."""
+    from scipy import optimize  # SciPy's optimisers load when a fit runs
+
     return optimize.least_squares(fun, x0, bounds=(lo, hi), method="trf", jac="3-point", x_scale="jac",
                                   ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=200 * (len(x0) + 1))
 
@@ -199,6 +200,8 @@ def _least_squares(fun, x0, lo, hi):
 def _quantile(noise: str, dof: int, level: float) -> float:
     """Two-sided ``level`` quantile: normal for known noise, Student's t with ``dof`` when estimated."""
     tail = 0.5 + 0.5 * level
+    from scipy import stats
+
     return float(stats.norm.ppf(tail) if noise == "known" else stats.t.ppf(tail, dof))
 
 
@@ -213,6 +216,8 @@ def profile_interval(weighted: Callable[[np.ndarray], np.ndarray], x_hat, j: int
     :func:`scipy.optimize.brentq`; an end whose bound is reached with the profiled RSS still below the threshold
     is the bound itself, one the data never bound is ``-/+inf``.
     """
+    from scipy import optimize
+
     x_hat = np.asarray(x_hat, dtype=float)
     rest = np.arange(x_hat.size) != j
     starts = {float(x_hat[j]): x_hat[rest]}

@@ -21,8 +21,6 @@ import numpy as np
 import xarray as xr
 
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.forward.physics.ift import chun_huh_ift, hirasaki_factor
-from spflow.plugins.forward.physics.phase_behaviour import flash, solubilization_ratios
 from spflow.plugins.lab.fit_result import FitError, fit_least_squares
 from spflow.plugins.lab.lab_table import lab_meta, read_lab_table
 from spflow.plugins.lab.phase_behaviour_fit import overall_composition
@@ -42,6 +40,8 @@ _SPEC = {p.name: p for p in PARAMETERS}
 def ift_model(interface, r_water, r_oil, chuh: float, ahuh: float, sigma_ow: float) -> np.ndarray:
     """IFT (mN/m) between the ME of ratios ``(r_water, r_oil)`` and pure excess water (``interface`` 1) or pure
     excess oil (``interface`` 2), Eqs. 2.9-2.10 via the forward model's kernels."""
+    from spflow.plugins.forward.physics.ift import chun_huh_ift, hirasaki_factor
+
     interface = np.asarray(interface)
     r13 = np.asarray(r_water, dtype=float)
     r23 = np.asarray(r_oil, dtype=float)
@@ -94,6 +94,8 @@ def synthetic_ift_table(truth: dict[str, float], salinity, surfactant, *, water_
     phase present beside the ME the Chun-Huh IFT with the truth's CHUH/AHUH/XIFTW is recorded times
     ``exp(N(0, noise^2))``.
     """
+    from spflow.plugins.forward.physics.phase_behaviour import flash, solubilization_ratios
+
     theta = [truth[n] for n in ("CSEL", "CSEU", "HBNC70", "HBNC71", "HBNC72")]
     rows = []
     for z3 in np.atleast_1d(surfactant):
@@ -136,6 +138,8 @@ def fit_ift(data: xr.Dataset, *, curve_points: int = 200) -> xr.Dataset:
     on dim ``point``) and the fitted law with ``F = 1`` (``curve_ift`` on dim ``curve_ratio``, log-spaced over the
     measured ratios) for the figure.
     """
+    from spflow.plugins.forward.physics.ift import chun_huh_ift, hirasaki_factor
+
     where = f"IFT table {data.attrs.get('source', '')!r}"
     sigma_ow = _check(data, where)
     interface = data["interface"].values

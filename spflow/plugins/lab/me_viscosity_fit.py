@@ -20,7 +20,6 @@ import numpy as np
 import xarray as xr
 
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.forward.physics.microemulsion_viscosity import microemulsion_viscosity
 from spflow.plugins.lab.fit_result import FitError, fit_least_squares
 from spflow.plugins.lab.lab_table import lab_meta, read_lab_table
 
@@ -40,6 +39,8 @@ _VIS_UNITS = ("cP", "mPa.s", "Pa.s")
 
 def viscosity_model(water, oil, surfactant, alphas, mu_w: float, mu_o: float) -> np.ndarray:
     """Eq. 2.11 (cP) at each composition; ``alphas`` = (ALPHAV1, ..., ALPHAV5)."""
+    from spflow.plugins.forward.physics.microemulsion_viscosity import microemulsion_viscosity
+
     c1, c2, c3 = (np.asarray(c, dtype=float) for c in (water, oil, surfactant))
     a = [float(x) for x in alphas]
     return np.array([microemulsion_viscosity(x1, x2, x3, mu_w, mu_o, *a)

@@ -24,7 +24,6 @@ import numpy as np
 import xarray as xr
 
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.forward.physics.phase_behaviour import flash, solubilization_ratios
 from spflow.plugins.lab.fit_result import FitError, fit_least_squares
 from spflow.plugins.lab.lab_table import lab_meta, read_lab_table
 
@@ -56,6 +55,8 @@ def solubilization_curve(salinity, theta, *, surfactant: float, water_oil_ratio:
     ``theta`` = (CSEL, CSEU, HBNC70, HBNC71, HBNC72); ``surfactant`` the overall surfactant volume fraction of a tube,
     ``water_oil_ratio`` its brine/oil volume ratio; ``epsme`` the CMC. Tubes without an ME give ``(0, 0)``.
     """
+    from spflow.plugins.forward.physics.phase_behaviour import flash, solubilization_ratios
+
     csel, cseu, c0, c1, c2 = (float(x) for x in theta)
     z1, z2, z3 = overall_composition(surfactant, water_oil_ratio)
     cse = np.asarray(salinity, dtype=float)

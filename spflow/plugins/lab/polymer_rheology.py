@@ -19,12 +19,8 @@ from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
-from numba import njit
 
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.forward.physics.effective_salinity import polymer_effective_salinity
-from spflow.plugins.forward.physics.polymer_viscosity import zero_shear_viscosity
-from spflow.plugins.forward.physics.shear_thinning import half_shear_rate, meter_viscosity
 
 from .fit_result import FitError, fit_least_squares
 from .lab_table import lab_meta
@@ -44,31 +40,14 @@ NAMES = ("AP1", "AP2", "AP3", "SSLOPE", "BETAP", "POWN", "A0", "A1", "A2")
 _SPEC = {s.name: s for s in PARAMETERS}
 
 
-@njit(cache=True)
-def _viscosity_loop(cp, c51, c61, gamma, mu_w, cse1, ap1, ap2, ap3, sslope, betap, pown, a0, a1, a2):
-    out = np.empty(cp.size)
-    for i in range(cp.size):
-        csep = polymer_effective_salinity(c51[i], c61[i], 1.0, betap)
-        mu0 = zero_shear_viscosity(mu_w, cp[i], csep, ap1, ap2, ap3, sslope, cse1)
-        ghalf = half_shear_rate(max(csep, cse1), cp[i], a0, a1, a2)
-        out[i] = meter_viscosity(mu_w, mu0, gamma[i], ghalf, pown)
-    return out
-
-
-@njit(cache=True)
-def _meter_loop(mu_w, mu0, gamma, ghalf, pown):
-    out = np.empty(gamma.size)
-    for i in range(gamma.size):
-        out[i] = meter_viscosity(mu_w, mu0, gamma[i], ghalf, pown)
-    return out
-
-
 def rheology_viscosity(theta: Mapping[str, float], cp, c51, c61, gamma, mu_w: float, cse1: float) -> np.ndarray:
     """Polymer-solution viscosity (cP) at ``cp`` (wt %), brine ``c51``/``c61`` (meq/ml), shear rate ``gamma``
     (1/s) for the parameters ``theta`` (``NAMES``), Eqs. 2.1-2.5; ``mu_w`` in cP, ``cse1`` in meq/ml."""
+    from .lab_kernels import viscosity_loop  # numba: compiled on first use, not when the stage is declared
+
     arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (cp, c51, c61, gamma)))
     flat = [np.ascontiguousarray(a.ravel()) for a in arrays]
-    out = _viscosity_loop(*flat, float(mu_w), float(cse1), *(float(theta[n]) for n in NAMES))
+    out = viscosity_loop(*flat, float(mu_w), float(cse1), *(float(theta[n]) for n in NAMES))
     return out.reshape(arrays[0].shape)
 
 
@@ -81,6 +60,8 @@ def _sweeps(data: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
 
 def _sweep_fits(data, index, table, mu_w):
     """Per-sweep Meter fits (mu_p0, gamma_half, POWN), the thesis's points of Figs. 2.2-2.3."""
+    from .lab_kernels import meter_loop
+
     out = np.empty((table.shape[0], 3))
     std = np.empty_like(out)
     for s in range(table.shape[0]):
@@ -92,7 +73,7 @@ def _sweep_fits(data, index, table, mu_w):
         half = 0.5 * (mu0_guess + mu_w)
         ghalf_guess = float(np.interp(-half, -mu[np.argsort(gamma)], np.sort(gamma)))
         fit = fit_least_squares(
-            lambda t, g=gamma, m=mu: np.log(_meter_loop(mu_w, t[0], g, t[1], t[2]) / m),
+            lambda t, g=gamma, m=mu: np.log(meter_loop(mu_w, t[0], g, t[1], t[2]) / m),
             [mu0_guess, max(ghalf_guess, 1e-3), 1.7], names=["mu0", "gamma_half", "POWN"],
             units=["cP", "1/s", "1"], bounds=[(mu_w * (1 + 1e-6), None), (1e-6, None), (1.0 + 1e-6, 5.0)],
         )

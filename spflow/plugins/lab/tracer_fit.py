@@ -24,7 +24,6 @@ from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
-from scipy.special import erfc, erfcx
 
 from spflow.plugins.forward.parameters import PARAMETERS
 
@@ -46,6 +45,8 @@ _ALPHA = next(s for s in PARAMETERS if s.name == "ALPHAL1")
 
 def ogata_banks_outlet(t_d, peclet: float) -> np.ndarray:
     """Relative concentration ``C/C0`` at the outlet (``x_D = 1``) after ``t_D`` injected PV (Ogata-Banks)."""
+    from scipy.special import erfc, erfcx
+
     t = np.asarray(t_d, dtype=float)
     out = np.zeros_like(t)
     pos = t > 0

@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from SALib.analyze import morris as morris_analyze
-from SALib.sample import morris as morris_sampler
 
 from spflow.core.errors import ParameterError
 
@@ -36,6 +34,8 @@ def check_morris_design(trajectories: int, levels: int, where: str = "Morris:") 
 def morris_sample(names: list[str], lower: np.ndarray, upper: np.ndarray, trajectories: int, *, levels: int = 4,
                   seed: int | np.random.Generator | None = None) -> np.ndarray:
     """The (trajectories (d + 1), d) Morris design on the box (physical units), in SALib's row order."""
+    from SALib.sample import morris as morris_sampler  # SALib loads when a design is drawn
+
     check_morris_design(trajectories, levels)
     return morris_sampler.sample(salib_problem(names, lower, upper), trajectories, num_levels=levels, seed=seed)
 
@@ -45,6 +45,8 @@ def morris_indices(x: np.ndarray, y: np.ndarray, names: list[str], lower: np.nda
                    seed: int | np.random.Generator | None = None) -> xr.Dataset:
     """mu, mu_star, mu_star_conf, sigma (``qoi``, ``param``; QoI units) and the QoI ``variance`` (``qoi``) from a
     :func:`morris_sample` design ``x`` and its evaluations ``y`` (n_runs, n_qoi)."""
+    from SALib.analyze import morris as morris_analyze
+
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     if y.ndim == 1:

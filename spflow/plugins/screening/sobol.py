@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from SALib.analyze import sobol as sobol_analyze
-from SALib.sample import sobol as sobol_sampler
 
 from spflow.core.errors import ParameterError
 
@@ -40,6 +38,8 @@ def sobol_sample(names: list[str], lower: np.ndarray, upper: np.ndarray, samples
                  calc_second_order: bool = False, seed: int | np.random.Generator | None = None) -> np.ndarray:
     """The (``sobol_runs``, d) Saltelli design on the box ``lower``..``upper`` (physical units), in SALib's row order;
     ``samples`` (N) must be a power of two."""
+    from SALib.sample import sobol as sobol_sampler  # SALib loads when a design is drawn
+
     check_base_samples(samples)
     return sobol_sampler.sample(salib_problem(names, lower, upper), samples, calc_second_order=calc_second_order,
                                 scramble=True, seed=seed)
@@ -53,6 +53,8 @@ def sobol_indices(y: np.ndarray, names: list[str], *, calc_second_order: bool = 
     With ``calc_second_order`` also S2, S2_conf (``qoi``, ``param``, ``param_j``; NaN on and below the diagonal).
     ``*_conf`` are half-widths of the ``conf_level`` bootstrap interval over ``resamples`` resamples.
     """
+    from SALib.analyze import sobol as sobol_analyze
+
     y = np.asarray(y, dtype=float)
     if y.ndim == 1:
         y = y[:, None]

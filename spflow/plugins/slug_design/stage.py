@@ -16,6 +16,8 @@ variable's ``units`` attribute (objectives: the ``objective_units`` coordinate, 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import xarray as xr
 from joblib import delayed
@@ -30,13 +32,14 @@ from spflow.plugins.forward.effects import default_registry
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.stage import Forward
 
-from .bgo_loop import BGOResult, run_bgo
 from .economics import Economics, ScaleUp
-from .front_uncertainty import front_uncertainty
 from .knee import knee_point
 from .objectives import OBJECTIVE_UNITS, OBJECTIVES, NoisyObjective, Realisations, SlugDesignProblem
 from .oil_price import OilPriceModel
 from .slug_schedule import DESIGN_VARIABLES, REFERENCE, SlugReference, design_bounds, minimum_total_pv
+
+if TYPE_CHECKING:
+    from .bgo_loop import BGOResult
 
 __all__ = ["SlugDesign", "SLUG_DESIGN"]
 
@@ -157,6 +160,8 @@ class SlugDesign(Stage):
         return np.array([-float(ref[0]), float(ref[1])])
 
     def run(self, ctx: StageContext, posterior: xr.Dataset | None = None) -> xr.Dataset:
+        from .bgo_loop import run_bgo  # GPy, SciPy's optimisers and moocore load when a design runs
+
         p = self.params
         reference = self._reference()
         draws = self.realisations(posterior)
@@ -184,6 +189,8 @@ class SlugDesign(Stage):
         """Per kept iteration (coordinate ``snapshot``): projected values and front membership (NaN/False for later
         evaluations) and the front uncertainty of that iteration's GPs: the EAF attainment surfaces (points
         ``eaf_point`` with their level), the Vorob'ev expectation (points ``vorob_point``), threshold and deviation."""
+        from .front_uncertainty import front_uncertainty
+
         keys = sorted(snapshots)
         projected = np.full((len(keys), n, 2), np.nan)
         on_front = np.zeros((len(keys), n), dtype=bool)

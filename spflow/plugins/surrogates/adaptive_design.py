@@ -17,7 +17,6 @@ from dataclasses import replace
 
 import numpy as np
 import xarray as xr
-from scipy.stats import qmc
 
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
@@ -71,6 +70,8 @@ class AdaptivePCE(Stage):
         return f"{super().code_fingerprint()}-{Forward.code_fingerprint()}"
 
     def _batch(self, space: xr.Dataset, size: int, iteration: int) -> xr.Dataset:
+        from scipy.stats import qmc
+
         sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"] + iteration)
         values = qmc.scale(sampler.random(size), space["lower"].values, space["upper"].values)
         return ParameterMap.of(space).design(values)

@@ -45,9 +45,7 @@ import numpy as np
 
 from spflow.core.errors import DegreeCapWarning, ParameterError
 
-from .basis import design_matrix, multi_indices
 from .blas import single_threaded_blas
-from .lars import hybrid_lars_outputs
 from .regression import ols
 
 __all__ = ["PCEFit", "fit_pce", "SOLVERS", "DEGREE_MAX", "MAX_TERMS_RATIO", "MIN_TERMS", "EXACT_FIT"]
@@ -102,6 +100,8 @@ class PCEFit:
 
 def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, parallel) -> tuple[np.ndarray, ...]:
     """(coefficients (m, P), loo, modified_loo, empirical) of one basis."""
+    from .lars import hybrid_lars_outputs  # scikit-learn loads when a PCE is fitted
+
     if solver == "ols":
         if psi.shape[0] <= psi.shape[1]:
             inf = np.full(y.shape[1], np.inf)
@@ -160,6 +160,8 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     ``(degree_max, degree_max)`` at the end. Warns (:class:`~spflow.core.errors.DegreeCapWarning`) when the selected
     degree is the cap.
     """
+    from .basis import design_matrix, multi_indices  # numba/numpoly load when a PCE is fitted
+
     z = np.atleast_2d(np.asarray(z, dtype=float))
     y = np.asarray(y, dtype=float)
     y = y[:, None] if y.ndim == 1 else y

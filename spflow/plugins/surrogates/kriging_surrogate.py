@@ -31,7 +31,6 @@ import xarray as xr
 
 from spflow.core.errors import ParameterError, SchemaError
 
-from .basis import design_matrix
 from .blas import single_threaded_blas
 from .contract import Surrogate
 from .kriging import KERNELS, UniversalKriging
@@ -65,6 +64,8 @@ class KrigingSurrogate(Surrogate):
     def __init__(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
                  x: np.ndarray, y: np.ndarray, indices: np.ndarray, trend: np.ndarray, group: np.ndarray,
                  lengthscale: np.ndarray, nugget: np.ndarray, kernel: str, info: dict):
+        from .basis import design_matrix  # numba: on first use
+
         lower, upper, x, y = self.check_training(names, lower, upper, outputs, x, y)
         super().__init__(names, lower, upper, outputs)
         self.x, self.y = x, y
@@ -162,6 +163,8 @@ class KrigingSurrogate(Surrogate):
         ``parallel`` (a :class:`joblib.Parallel`) spreads the groups over workers; ``progress`` (e.g.
         ``ctx.progress``) wraps the iterable of groups to report how many were fitted (dispatched, in parallel).
         """
+        from .basis import design_matrix
+
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
         lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
         if len(orders) != y.shape[1]:
@@ -195,6 +198,8 @@ class KrigingSurrogate(Surrogate):
 
     # -- prediction -------------------------------------------------------------------------------------------------
     def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        from .basis import design_matrix
+
         z = self.to_unit(x)
         basis = design_matrix(z, self.indices)
         mean = np.empty((z.shape[0], len(self.outputs)))

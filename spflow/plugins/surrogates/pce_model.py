@@ -22,7 +22,6 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 
 from . import sobol_from_pce as sobol
-from .basis import design_matrix
 from .blas import single_threaded_blas
 from .contract import Surrogate
 from .degree_adaptive import PCEFit, fit_pce
@@ -90,6 +89,8 @@ class PCE(Surrogate):
         return self.modified_loo * self.output_variance
 
     def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        from .basis import design_matrix  # numba: on first prediction
+
         z = self.to_unit(x)
         mean = np.empty((z.shape[0], self.coefficients.shape[0]))
         coef_t = self.coefficients.T

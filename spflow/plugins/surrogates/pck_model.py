@@ -10,10 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .basis import design_matrix
 from .degree_adaptive import fit_pce
 from .kriging_surrogate import KrigingSurrogate
-from .lars import hybrid_lars_outputs
 from .outputs import OutputIndex
 
 __all__ = ["PCK"]
@@ -31,6 +29,9 @@ class PCK(KrigingSurrogate):
             kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8, restarts: int = 5, seed: int = 0,
             parallel=None, progress=None) -> PCK:
         """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
+        from .basis import design_matrix  # numba and scikit-learn load when a PCK is fitted
+        from .lars import hybrid_lars_outputs
+
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
         lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
         z = 2.0 * (x - lower) / (upper - lower) - 1.0

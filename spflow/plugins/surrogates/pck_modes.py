@@ -22,7 +22,6 @@ from spflow.core.errors import ParameterError
 
 from .blas import single_threaded_blas
 from .kriging import UniversalKriging
-from .kriging_likelihood import fit_lengthscales
 
 __all__ = ["MODES", "trend_mask", "fit_group"]
 
@@ -43,6 +42,8 @@ def fit_group(z: np.ndarray, y: np.ndarray, basis: np.ndarray, orders: list[np.n
 
     ``basis`` (n, P) holds the trend candidates at ``z``; ``orders[j]`` lists column j's candidates in LARS order.
     """
+    from .kriging_likelihood import fit_lengthscales  # GPy/SciPy's optimisers load when lengths are fitted
+
     if mode not in MODES:
         raise ParameterError(f"PC-Kriging mode {mode!r} is not known; allowed: {list(MODES)}")
     with single_threaded_blas():  # small factorisations (GPy's kernels too); parallelism is over groups
