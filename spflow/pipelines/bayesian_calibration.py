@@ -73,13 +73,15 @@ def pipeline(samples: int = 300, cells: int = 100, degree_max: int = 3, sampler:
 
 
 def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | None = None) -> list[str]:
-    """Appendix B-E figures, Figs. 4.4-4.5, the posterior and predictive Datasets, and a summary table."""
+    """Appendix B-E figures, Figs. 4.4-4.5, the posterior as ArviZ InferenceData (``posterior.nc``,
+    :mod:`spflow.plugins.calibration.inference_data`), the predictive Dataset, and a summary table."""
     from spflow.plugins.calibration import mcmc_figures as fig
     from spflow.plugins.calibration.diagnostics import summary
+    from spflow.plugins.calibration.inference_data import write_inference_data
 
     posterior, bands = result["posterior"], result["predictive"]
     observations, prior = result["observations"], result["prior_bands"]
-    posterior.to_netcdf(outdir / "posterior.nc")
+    write_inference_data(outdir / "posterior.nc", posterior, result["surrogate"], observations)
     bands.to_netcdf(outdir / "predictive.nc")
     training = list(dict.fromkeys(str(e) for e in posterior["block_experiment"].values))
     heldout = [str(e) for e in bands["experiment"].values if str(e) not in training]
@@ -97,7 +99,8 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
             title=f"Fig. 4.5: posterior prediction of the held-out corefloods {', '.join(heldout)}"))
     table = summary(posterior)
     noise = summary(posterior, "sigma", "block")
-    lines = [f"wrote {len(written)} figures, posterior.nc and predictive.nc to {outdir}",
+    lines = [f"wrote {len(written)} figures, posterior.nc (ArviZ InferenceData: az.from_netcdf) and predictive.nc to "
+             f"{outdir}",
              f"sampler {posterior.attrs['sampler']} ({posterior.sizes['chain']} chains x {posterior.sizes['draw']} "
              f"draws), noise {posterior.attrs['noise']}, surrogate {posterior.attrs['surrogate']}, acceptance "
              f"{float(posterior['acceptance'].mean()):.2f}",
