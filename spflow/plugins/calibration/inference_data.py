@@ -46,7 +46,7 @@ from .diagnostics import arviz
 from .likelihood import PosteriorModel
 from .posterior import POSTERIOR
 
-__all__ = ["to_inference_data", "write_inference_data", "read_posterior", "posterior_model"]
+__all__ = ["to_inference_data", "from_run", "write_inference_data", "read_posterior", "posterior_model"]
 
 #: Rows of draws evaluated per surrogate call (bounds the memory of one call).
 _CHUNK = 4096
@@ -182,6 +182,13 @@ def to_inference_data(posterior: xr.Dataset, surrogate: xr.Dataset, observations
     for group, ds in groups.items():
         _stamp(ds, f"spflow MCMC posterior: {group}").attrs.update(sampler)
     return az.InferenceData(**groups)
+
+
+def from_run(result, posterior: str = "posterior", surrogate: str = "surrogate", observations: str = "observations",
+             **kwargs):
+    """:func:`to_inference_data` of a run's result (``spflow.run(...)``), its sampler node ``posterior`` and the
+    nodes ``surrogate`` and ``observations`` that fed it (the names of ``bayesian_calibration``)."""
+    return to_inference_data(result[posterior], result[surrogate], result[observations], **kwargs)
 
 
 def read_posterior(path: str | Path) -> xr.Dataset:
