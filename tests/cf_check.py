@@ -22,6 +22,7 @@ def unit_problem(unit) -> str | None:
     """Why ``unit`` is not an acceptable UDUNITS string, or None."""
     if not isinstance(unit, str):
         return f"units {unit!r} is not a string"
+    unit = str(unit)  # a numpy string as plain text
     if unit.strip() in MISREAD:
         return f"units {unit!r} reads as {MISREAD[unit.strip()]} in UDUNITS"
     try:

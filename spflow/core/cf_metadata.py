@@ -13,7 +13,9 @@ The convention (docs/architecture.md, "Units and CF metadata"):
 * string and boolean variables carry no units;
 * every variable carries a ``long_name`` (CF-1.10 §3.2).
 
-A file whose every variable follows the first form claims ``Conventions = "CF-1.10"`` (:data:`CONVENTIONS`): of CF
+A file whose every variable follows the first form claims ``Conventions = "CF-1.10"`` (:data:`CONVENTIONS`; the
+executor stamps it on a node's result when :func:`claims_cf` holds, so a Dataset with units per element makes no
+claim): of CF
 it uses the ``Conventions`` (§2.6.1), ``units`` (§3.1) and ``long_name`` (§3.2) attributes and coordinate variables
 named as their dimension (§1.3); it sets no ``standard_name`` (optional in CF). :func:`udunits` translates the forward
 model's catalogue notation (``"-"``, ``"cP"``, ...) into UDUNITS strings where the translation is exact.
@@ -23,7 +25,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["CONVENTIONS", "UNITS_VARIABLE", "udunits"]
+__all__ = ["CONVENTIONS", "UNITS_VARIABLE", "NO_UDUNITS_FORM", "udunits", "claims_cf"]
 
 #: The ``Conventions`` attribute of a file whose variables all carry UDUNITS ``units`` and a ``long_name``.
 CONVENTIONS = "CF-1.10"
@@ -32,18 +34,40 @@ UNITS_VARIABLE = "units_variable"
 
 #: Catalogue notations UDUNITS reads differently or not at all, with their exact UDUNITS equivalent. "PV" (injected
 #: pore volumes, a volume ratio) would parse as petavolt and "nat" as nano technical atmospheres.
-_NOTATION = {"-": "1", "": "1", "PV": "1", "fraction": "1", "nat": "1", "cP": "cpoise", "wt%": "percent",
-             "1/wt%": "1/percent", "1/vol. frac.": "1"}
+_NOTATION = {"-": "1", "": "1", "PV": "1", "fraction": "1", "vol. frac.": "1", "1/vol. frac.": "1", "nat": "1",
+             "cP": "cpoise", "mD": "millidarcy", "wt%": "percent", "1/wt%": "1/percent", "(wt%)^-1": "1/percent",
+             "(wt%)^-2": "1/percent^2", "(wt%)^-3": "1/percent^3", "log10(dyne/cm)": "lg(re 1 dyne/cm)"}
+#: Units of the forward model's catalogue that have no exact UDUNITS form: milliequivalents are not a UDUNITS unit,
+#: and UDUNITS takes no fractional powers. A Dataset holding one claims no CF conventions (:func:`claims_cf`).
+NO_UDUNITS_FORM = frozenset({"meq/ml", "ml/meq", "(1/s)/(meq/ml)", "darcy^0.5*(wt%)^-1/3"})
 _LOG = re.compile(r"lg\(re 1(?: (?P<unit>.+))?\)")
 
 
 def udunits(unit: str) -> str:
     """The UDUNITS-2 form of a unit written in the forward model's catalogue notation (``"-"`` -> ``"1"``,
     ``"cP"`` -> ``"cpoise"``, ``"lg(re 1 cP)"`` -> ``"lg(re 1 cpoise)"``); any other string is returned unchanged
-    (a unit with no exact UDUNITS form, e.g. ``ml/meq``, stays as written and fails the units check)."""
+    (a unit with no exact UDUNITS form stays as written and fails the units check: milliequivalents, ``meq/ml``,
+    are not a UDUNITS unit, and ``darcy^0.5*(wt%)^-1/3`` has fractional powers UDUNITS does not take)."""
     unit = str(unit).strip()
     match = _LOG.fullmatch(unit)
     if match:
         inner = udunits(match["unit"] or "1")
         return "lg(re 1)" if inner == "1" else f"lg(re 1 {inner})"
     return _NOTATION.get(unit, unit)
+
+
+def claims_cf(ds) -> bool:
+    """Whether ``ds`` may claim :data:`CONVENTIONS`: every variable has a ``long_name``, every numeric one a
+    ``units`` string not in the catalogue notation :func:`udunits` rewrites nor in :data:`NO_UDUNITS_FORM` (no units
+    per element). Whether each
+    string parses is not decided here (spflow carries no units library at run time): the tests parse the units of
+    every built-in stage's schema and written results with UDUNITS-2."""
+    for var in ds.variables.values():
+        if not str(var.attrs.get("long_name", "")).strip():
+            return False
+        if var.dtype.kind in "fiuc":
+            unit = var.attrs.get("units")
+            if (not isinstance(unit, str) or udunits(unit) != unit.strip() or unit.strip() in NO_UDUNITS_FORM
+                    or UNITS_VARIABLE in var.attrs):
+                return False
+    return True

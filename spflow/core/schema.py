@@ -116,11 +116,12 @@ class DatasetSchema:
                               f"{None if units is None else (units.dims, str(units.dtype))}")
 
     def annotate(self, ds: xr.Dataset) -> xr.Dataset:
-        """``ds`` (changed in place) with each declared variable's ``long_name`` and ``units_variable`` written into
-        its attrs where it has none: a writer calls this on the Dataset it returns."""
+        """A shallow copy of ``ds`` with each declared variable's ``long_name`` and ``units_variable`` written into its
+        attrs where it has none (the executor annotates every output before validating and storing it)."""
+        ds = ds.copy(deep=False)
         for name, spec in self.variables.items():
             if name in ds.variables:
-                attrs = ds[name].attrs
+                attrs = ds.variables[name].attrs
                 if spec.long_name:
                     attrs.setdefault("long_name", spec.long_name)
                 if spec.units_variable is not None:

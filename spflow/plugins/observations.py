@@ -51,7 +51,7 @@ _ALLOWED = ("dp", "recovery", *_AVERAGED)
 #: Schema of measured data on the simulator grid.
 OBSERVATIONS = DatasetSchema(
     dims=("experiment", "pv"),
-    variables={"total_pv": Variable(("experiment",), units="PV")},
+    variables={"total_pv": Variable(("experiment",), units="PV", long_name="pore volumes injected in the coreflood")},
     doc="measured corefloods on the simulator's output grid",
 )
 

@@ -7,8 +7,10 @@ from spflow.plugins.design.parameter_map import NAMES_VAR, SCALE_VAR
 #: column is the UTCHEM name it sets, on a linear scale.
 MAP_VARIABLES = {
     NAMES_VAR: Variable(("param",), kind="UO", required=False,
+                        long_name="forward-model (UTCHEM) parameters each column sets",
                              doc="forward-model (UTCHEM) parameters each column sets, separated by spaces"),
     SCALE_VAR: Variable(("param",), kind="UO", required=False,
+                        long_name="linear: the column is the value; log: the column is log10 of the value",
                       doc="linear: the column is the value; log: the column is log10 of the value"),
 }
 
@@ -17,10 +19,10 @@ MAP_VARIABLES = {
 SPACE = DatasetSchema(
     dims=("param",),
     variables={
-        "lower": Variable(("param",), units=None),
-        "upper": Variable(("param",), units=None),
-        "default": Variable(("param",), units=None),
-        "unit": Variable(("param",), kind="U"),
+        "lower": Variable(("param",), units=None, long_name="lower end of the range"),
+        "upper": Variable(("param",), units=None, long_name="upper end of the range"),
+        "default": Variable(("param",), units=None, long_name="default value"),
+        "unit": Variable(("param",), kind="U", long_name="unit of each column"),
     } | MAP_VARIABLES,
     doc="uncertain parameters with uniform bounds",
 )
@@ -28,6 +30,6 @@ SPACE = DatasetSchema(
 #: Sample points in a parameter space (dims ``sample``, ``param``).
 DESIGN = DatasetSchema(
     dims=("sample", "param"),
-    variables={"values": Variable(("sample", "param"), units=None)} | MAP_VARIABLES,
+    variables={"values": Variable(("sample", "param"), units=None, long_name="design points")} | MAP_VARIABLES,
     doc="design points",
 )

@@ -45,14 +45,24 @@ RESPONSE_UNITS = {
     "c_surfactant_out": "ppm",
     "salinity_out": "ppm",
 }
+#: Their long names.
+RESPONSE_NAMES = {
+    "dp": "pressure drop across the core",
+    "oil_cut": "oil cut of the effluent",
+    "recovery": "oil recovered, fraction of the oil in place",
+    "c_polymer_out": "polymer concentration of the effluent",
+    "c_surfactant_out": "surfactant concentration of the effluent",
+    "salinity_out": "salinity of the effluent",
+}
 
 RESPONSES = DatasetSchema(
     dims=("sample", "experiment", "pv"),
     variables={
-        name: Variable(("sample", "experiment", "pv"), units=None, allow_nan=True) for name in RESPONSE_UNITS
+        name: Variable(("sample", "experiment", "pv"), units=None, allow_nan=True, long_name=RESPONSE_NAMES[name])
+        for name in RESPONSE_UNITS
     }
-    | {"total_pv": Variable(("experiment",), units="PV"),
-       "failure": Variable(("sample",), kind="UO", required=False,
+    | {"total_pv": Variable(("experiment",), units="PV", long_name="pore volumes injected in the coreflood"),
+       "failure": Variable(("sample",), kind="UO", required=False, long_name="why the sample's run failed",
                            doc="why a sample's run failed (its rows are NaN); empty for a sample that ran")},
     doc="simulated coreflood responses",
 )

@@ -44,12 +44,12 @@ __all__ = ["SlugDesign", "SLUG_DESIGN"]
 SLUG_DESIGN = DatasetSchema(
     dims=("evaluation", "design_var", "objective"),
     variables={
-        "design": Variable(("evaluation", "design_var")),
-        "observed": Variable(("evaluation", "objective")),
-        "projected": Variable(("evaluation", "objective")),
-        "on_front": Variable(("evaluation",), kind="b"),
-        "knee_design": Variable(("design_var",), units="PV"),
-        "knee_projected": Variable(("objective",)),
+        "design": Variable(("evaluation", "design_var"), long_name="slug sizes of each evaluated design"),
+        "observed": Variable(("evaluation", "objective"), long_name="objective values of each evaluation"),
+        "projected": Variable(("evaluation", "objective"), long_name="objectives projected under the drift"),
+        "on_front": Variable(("evaluation",), kind="b", long_name="on the projected Pareto front"),
+        "knee_design": Variable(("design_var",), units="PV", long_name="slug sizes of the knee design"),
+        "knee_projected": Variable(("objective",), long_name="projected objectives of the knee design"),
     },
     attrs=("drift", "steps_per_year", "total_pv"),
     doc="EEIHV slug-size design: evaluations, projected Pareto front, front uncertainty and knee design (§4.7)",

@@ -28,10 +28,11 @@ __all__ = ["Surrogate", "SURROGATE", "load_surrogate", "surrogate_kinds"]
 SURROGATE = DatasetSchema(
     dims=("param", "output"),
     variables={
-        "lower": Variable(("param",), units=None),
-        "upper": Variable(("param",), units=None),
-        "output_variable": Variable(("output",), kind="U"),
-        "output_pv": Variable(("output",), units="PV", allow_nan=True),
+        "lower": Variable(("param",), units=None, long_name="lower end of the training box"),
+        "upper": Variable(("param",), units=None, long_name="upper end of the training box"),
+        "output_variable": Variable(("output",), kind="U", long_name="variable of each output column"),
+        "output_pv": Variable(("output",), units="PV", allow_nan=True,
+                              long_name="injected pore volumes of each output column"),
     },
     attrs=("surrogate",),
     doc="a fitted surrogate (see attrs['surrogate'] for its kind)",
