@@ -34,8 +34,6 @@ NOT_YET = {
     ("gap report: localisation, candidate scores, verdict, gap closed", "theta"): _BOX,
     ("measured corefloods on the simulator's output grid", "total_pv"): _PV,
     ("simulated coreflood responses", "total_pv"): _PV,
-    **{("simulated coreflood responses", v): "exact units (RESPONSE_UNITS) not declared: hand-built responses"
-       for v in ("dp", "oil_cut", "recovery", "c_polymer_out", "c_surfactant_out", "salinity_out")},
     **{("lab fit: estimates, standard errors and covariance of sub-model parameters", v): _BOX
        for v in ("estimate", "std", "profile_lower", "profile_upper")},
     ("lab fit: estimates, standard errors and covariance of sub-model parameters", "covariance"):

@@ -58,8 +58,8 @@ RESPONSE_NAMES = {
 RESPONSES = DatasetSchema(
     dims=("sample", "experiment", "pv"),
     variables={
-        name: Variable(("sample", "experiment", "pv"), units=None, allow_nan=True, long_name=RESPONSE_NAMES[name])
-        for name in RESPONSE_UNITS
+        name: Variable(("sample", "experiment", "pv"), units=unit, allow_nan=True, long_name=RESPONSE_NAMES[name])
+        for name, unit in RESPONSE_UNITS.items()
     }
     | {"total_pv": Variable(("experiment",), units="PV", long_name="pore volumes injected in the coreflood"),
        "failure": Variable(("sample",), kind="UO", required=False, long_name="why the sample's run failed",
@@ -149,8 +149,9 @@ class Forward(Stage):
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
             | {"total_pv": ("experiment", total, {"units": "PV"}), "failure": ("sample", failure.astype(str))},
-            coords={"sample": np.arange(len(rows)), "experiment": [e.name for e in experiments], "pv": grid},
+            coords={"sample": ("sample", np.arange(len(rows)), {"units": "1", "long_name": "sample number"}),
+                    "experiment": ("experiment", [e.name for e in experiments], {"long_name": "coreflood"}),
+                    "pv": ("pv", grid, {"units": "PV", "long_name": "injected pore volumes"})},
             attrs={"cells": self.params["cells"], "scheme": self.params["scheme"]},
         )
-        out["pv"].attrs["units"] = "PV"
-        return out
+        return RESPONSES.annotate(out)
