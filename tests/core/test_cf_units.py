@@ -25,9 +25,6 @@ NOT_YET = {
     ("a fitted surrogate (see attrs['surrogate'] for its kind)", "lower"): _BOX,
     ("a fitted surrogate (see attrs['surrogate'] for its kind)", "upper"): _BOX,
     ("a fitted surrogate (see attrs['surrogate'] for its kind)", "output_pv"): _PV,
-    ("uncertain parameters with uniform bounds", "lower"): _BOX,
-    ("uncertain parameters with uniform bounds", "upper"): _BOX,
-    ("uncertain parameters with uniform bounds", "default"): _BOX,
     ("design points", "values"): _BOX,
     ("gap report: localisation, candidate scores, verdict, gap closed", "delta_elpd"):
         "'nat' (nano technical atmosphere in UDUNITS); the gap stage's writer is another branch's",

@@ -15,14 +15,14 @@ MAP_VARIABLES = {
 }
 
 #: A box of uncertain forward-model parameters (dim ``param``; coordinate = column labels: UTCHEM names or labels of
-#: groups, with the parameter map).
+#: groups, with the parameter map). The bounds have units per element, ``unit`` (:mod:`spflow.core.cf_metadata`).
 SPACE = DatasetSchema(
     dims=("param",),
     variables={
-        "lower": Variable(("param",), units=None, long_name="lower end of the range"),
-        "upper": Variable(("param",), units=None, long_name="upper end of the range"),
-        "default": Variable(("param",), units=None, long_name="default value"),
-        "unit": Variable(("param",), kind="U", long_name="unit of each column"),
+        "lower": Variable(("param",), units_variable="unit", long_name="lower end of the range"),
+        "upper": Variable(("param",), units_variable="unit", long_name="upper end of the range"),
+        "default": Variable(("param",), units_variable="unit", long_name="default value"),
+        "unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each column"),
     } | MAP_VARIABLES,
     doc="uncertain parameters with uniform bounds",
 )
