@@ -175,13 +175,15 @@ class Observations(Stage):
             for name, series in on_simulator_grid(at_core_outlet(ds, float(shifts[i])), variables, own, step).items():
                 values[name][i, positions[i]] = series
         out = xr.Dataset(
-            {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1]}) for name, v in values.items()}
+            {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1], "long_name": f"observed {VARIABLES[name][2]}"
+                                                                            " on the simulator grid"})
+             for name, v in values.items()}
             | {"total_pv": ("experiment", totals, {"units": "PV"}),
                "dead_volume_pv": ("experiment", shifts, {"units": "PV", "long_name": "outlet dead volume the "
                                                           "effluent series were moved back by"})},
-            coords={"experiment": names, "pv": grid},
+            coords={"experiment": ("experiment", names, {"long_name": "coreflood"}),
+                    "pv": ("pv", grid, {"units": "PV", "long_name": "injected pore volumes"})},
             attrs={"pv_step": step, "sources": " ".join(map(source_label, self.params["experiments"])),
                    "coreflood_attrs": json.dumps({n: _json_attrs(ds.attrs) for n, ds in zip(names, data)})},
         )
-        out["pv"].attrs["units"] = "PV"
         return out

@@ -85,7 +85,7 @@ class ParameterSpace(Stage):
                                       for p in ps], per),
                 "unit": ("param", np.array([udunits(log_unit(p.unit) if p.log else p.unit) for p in ps])),
             },
-            coords={"param": [p.label for p in ps]},
+            coords={"param": ("param", [p.label for p in ps], {"long_name": "calibrated parameter (design column)"})},
             attrs={"distribution": "independent uniform"},
         )
         return ParameterMap.of_parameters(ps).attach(space)

@@ -27,9 +27,12 @@ SPACE = DatasetSchema(
     doc="uncertain parameters with uniform bounds",
 )
 
-#: Sample points in a parameter space (dims ``sample``, ``param``).
+#: Sample points in a parameter space (dims ``sample``, ``param``). With ``unit`` (a design drawn from a space),
+#: ``values`` has units per element; a design without it (hand-made, or from draws) carries no units.
 DESIGN = DatasetSchema(
     dims=("sample", "param"),
-    variables={"values": Variable(("sample", "param"), units=None, long_name="design points")} | MAP_VARIABLES,
+    variables={"values": Variable(("sample", "param"), units=None, long_name="design points"),
+               "unit": Variable(("param",), kind="U", required=False, long_name="UDUNITS unit of each column")}
+    | MAP_VARIABLES,
     doc="design points",
 )

@@ -156,7 +156,7 @@ class Priors(Stage):
                 "unit": ("param", np.array([udunits(_BY_NAME[n].unit) for n in names])),
                 "source": ("param", np.array(source)),
             },
-            coords={"param": names},
+            coords={"param": ("param", names, {"long_name": "forward-model parameter"})},
             attrs={"distribution": "independent uniform", "mode": p["mode"],
                    "half_width": f"{p['relative']:g} * |estimate|" if p["mode"] == "relative"
                    else f"{p['k']:g} * std"},
