@@ -99,6 +99,27 @@ def test_other_observations_than_the_posteriors_are_refused():
         to_inference_data(posterior, toy.to_dataset(), fewer)
     with pytest.raises(ParameterError, match="prior_draws"):
         to_inference_data(posterior, toy.to_dataset(), obs, prior_draws=0)
+    with pytest.raises(ParameterError, match="thin"):
+        to_inference_data(posterior, toy.to_dataset(), obs, thin=0)
+
+
+def test_thinning_keeps_every_kth_draw_and_says_so(tmp_path):
+    posterior, toy, obs, *_ = _toy_run("known", sigma=SIGMA)
+    idata = to_inference_data(posterior, toy.to_dataset(), obs, thin=3)
+    np.testing.assert_array_equal(idata.posterior["p"].values, posterior["theta"].sel(param="p").values[:, ::3])
+    assert idata.log_likelihood["y"].shape[:2] == (posterior.sizes["chain"], -(-posterior.sizes["draw"] // 3))
+    np.testing.assert_allclose(idata.log_likelihood["y"].values.sum(axis=-1),
+                               posterior["log_likelihood"].values[:, ::3], rtol=1e-10)
+    assert all(idata[g].attrs["thinned_by"] == 3 for g in idata.groups())
+
+
+def test_a_plain_netcdf_file_is_not_read_as_a_posterior(tmp_path):
+    from spflow.plugins.calibration.inference_data import read_posterior
+
+    posterior, *_ = _toy_run("jeffreys_marginal")
+    posterior.to_netcdf(tmp_path / "plain.nc")
+    with pytest.raises(ParameterError, match="plain.nc.*not an MCMC posterior written as InferenceData"):
+        read_posterior(tmp_path / "plain.nc")
 
 
 def test_the_opm_export_reads_the_draws_back_from_the_file(tmp_path):

@@ -98,14 +98,17 @@ def _stamp(ds: xr.Dataset, title: str) -> xr.Dataset:
 
 
 def to_inference_data(posterior: xr.Dataset, surrogate: xr.Dataset, observations: xr.Dataset, *,
-                      prior_draws: int = 1000, seed: int = 0):
+                      prior_draws: int = 1000, seed: int = 0, thin: int = 1):
     """The ``az.InferenceData`` of a sampler stage's ``posterior`` (module docstring); ``surrogate`` and
     ``observations`` are the Datasets the sampler was given; ``prior_draws`` uniform prior draws of θ and the
-    predictive noise come from ``seed``."""
-    if not isinstance(prior_draws, int) or prior_draws < 1:
-        raise ParameterError(f"to_inference_data: prior_draws must be a positive integer, got {prior_draws!r}")
+    predictive noise come from ``seed``; ``thin``: keep every ``thin``-th draw of each chain (recorded as the
+    groups' attribute ``thinned_by``)."""
+    for name, value in (("prior_draws", prior_draws), ("thin", thin)):
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            raise ParameterError(f"to_inference_data: {name} must be a positive integer, got {value!r}")
     az = arviz()
     model = posterior_model(posterior, surrogate, observations)
+    posterior = posterior.isel(draw=slice(None, None, thin))
     chains, draws = posterior.sizes["chain"], posterior.sizes["draw"]
     names = [str(n) for n in posterior["param"].values]
     units = [udunits(u) for u in posterior["unit"].values]
@@ -183,6 +186,7 @@ def to_inference_data(posterior: xr.Dataset, surrogate: xr.Dataset, observations
         coords={"bound": ("bound", ["lower", "upper"], {"long_name": "end of the range"}),
                 "param": ("param", names, {"long_name": "calibrated parameter (design column)"})})
     sampler = {k: posterior.attrs[k] for k in ("sampler", "noise", "surrogate") if k in posterior.attrs}
+    sampler["thinned_by"] = thin
     groups = {"posterior": post, "sample_stats": stats, "log_likelihood": log_lik, "observed_data": observed,
               "posterior_predictive": predictive, "prior": prior, "constant_data": constant}
     for group, ds in groups.items():
