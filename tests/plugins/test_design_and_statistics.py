@@ -55,7 +55,7 @@ def test_quantiles_match_numpy(tmp_path):
     values = rng.normal(size=(50, 2, 7))
     ens = xr.Dataset(
         {"dp": (("sample", "experiment", "pv"), values, {"units": "Pa"}),
-         "total_pv": ("experiment", [1.0, 2.0], {"units": "PV"})},
+         "total_pv": ("experiment", [1.0, 2.0], {"units": "1"})},
         coords={"sample": np.arange(50), "experiment": ["A", "B"], "pv": np.linspace(0, 0.6, 7)},
     )
     p = spflow.Pipeline("q").add_data("ens", ens).add("q", "quantiles", inputs={"ensemble": "ens"},

@@ -61,7 +61,7 @@ RESPONSES = DatasetSchema(
         name: Variable(("sample", "experiment", "pv"), units=unit, allow_nan=True, long_name=RESPONSE_NAMES[name])
         for name, unit in RESPONSE_UNITS.items()
     }
-    | {"total_pv": Variable(("experiment",), units="PV", long_name="pore volumes injected in the coreflood"),
+    | {"total_pv": Variable(("experiment",), units="1", long_name="pore volumes injected in the coreflood"),
        "failure": Variable(("sample",), kind="UO", required=False, long_name="why the sample's run failed",
                            doc="why a sample's run failed (its rows are NaN); empty for a sample that ran")},
     doc="simulated coreflood responses",
@@ -82,7 +82,7 @@ def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step, max_st
 
 class Forward(Stage):
     name = "forward"
-    version = "2"
+    version = "3"
     description = "SP coreflood simulator over a design and a set of experiments"
     inputs = {"design": DESIGN}
     optional_inputs = frozenset({"design"})
@@ -148,10 +148,10 @@ class Forward(Stage):
         out = xr.Dataset(
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
-            | {"total_pv": ("experiment", total, {"units": "PV"}), "failure": ("sample", failure.astype(str))},
+            | {"total_pv": ("experiment", total, {"units": "1"}), "failure": ("sample", failure.astype(str))},
             coords={"sample": ("sample", np.arange(len(rows)), {"units": "1", "long_name": "sample number"}),
                     "experiment": ("experiment", [e.name for e in experiments], {"long_name": "coreflood"}),
-                    "pv": ("pv", grid, {"units": "PV", "long_name": "injected pore volumes"})},
+                    "pv": ("pv", grid, {"units": "1", "long_name": "injected pore volumes"})},
             attrs={"cells": self.params["cells"], "scheme": self.params["scheme"]},
         )
         return RESPONSES.annotate(out)

@@ -31,7 +31,7 @@ _COMMON = {
                          long_name="QoI variance over the parameter's screening design"),
     "qoi_variable": Variable(("qoi",), kind="U", long_name="variable of the QoI"),
     "qoi_experiment": Variable(("qoi",), kind="U", long_name="coreflood of the QoI"),
-    "qoi_pv": Variable(("qoi",), units="PV", allow_nan=True, long_name="injected pore volumes of the QoI"),
+    "qoi_pv": Variable(("qoi",), units="1", allow_nan=True, long_name="injected pore volumes of the QoI"),
     "qoi_units": Variable(("qoi",), kind="U", long_name="unit of the QoI"),
 }
 

@@ -35,7 +35,7 @@ SURROGATE = DatasetSchema(
         "lower": Variable(("param",), units=None, long_name="lower end of the training box"),
         "upper": Variable(("param",), units=None, long_name="upper end of the training box"),
         "output_variable": Variable(("output",), kind="U", long_name="variable of each output column"),
-        "output_pv": Variable(("output",), units="PV", allow_nan=True,
+        "output_pv": Variable(("output",), units="1", allow_nan=True,
                               long_name="injected pore volumes of each output column"),
     },
     attrs=("surrogate",),

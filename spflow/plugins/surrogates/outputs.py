@@ -54,7 +54,7 @@ class OutputIndex:
         return {"output_variable": ("output", self.variable.astype(str), {"long_name": "variable of the output"}),
                 "output_experiment": ("output", self.experiment.astype(str),
                                       {"long_name": "coreflood of the output (empty: none)"}),
-                "output_pv": ("output", self.pv.astype(float), {"units": "PV", "long_name": "injected pore volumes "
+                "output_pv": ("output", self.pv.astype(float), {"units": "1", "long_name": "injected pore volumes "
                                                                                           "of the output (NaN: none)"}),
                 "output_unit": ("output", np.array(unit, dtype=str), {"long_name": "UDUNITS unit of the output"}),
                 "output_unit_squared": ("output", np.array(["1" if u == "1" else f"({u})^2" for u in unit], dtype=str),
