@@ -133,3 +133,15 @@ def test_the_opm_export_reads_the_draws_back_from_the_file(tmp_path):
     k = theta.shape[1] + 3  # chain 1, draw 3
     one, where = posterior_parameters(path, str(k))
     assert one == {"AP1": theta[1, 3, 0], "AP3": theta[1, 3, 1]} and "chain 1, draw 3" in where
+
+
+def test_the_posterior_summary_keeps_the_draws_units():
+    from spflow.plugins.calibration.diagnostics import summary
+
+    posterior, *_ = _toy_run("jeffreys_sampled")
+    for variable, dim, holder in (("theta", "param", "unit"), ("sigma", "block", "block_units")):
+        table = summary(posterior, variable, dim)
+        assert dataset_problems(table) == []
+        assert table["mean"].attrs["units_variable"] == holder and table["q975"].attrs["units_variable"] == holder
+        assert table[holder].values.tolist() == posterior[holder].values.tolist()
+        assert table["ess_bulk"].attrs["units"] == "1"
