@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["CONVENTIONS", "UNITS_VARIABLE", "NO_UDUNITS_FORM", "udunits", "claims_cf"]
+__all__ = ["CONVENTIONS", "UNITS_VARIABLE", "NO_UDUNITS_FORM", "udunits", "claims_cf", "has_units_per_element"]
 
 #: The ``Conventions`` attribute of a file whose variables all carry UDUNITS ``units`` and a ``long_name``.
 CONVENTIONS = "CF-1.10"
@@ -71,3 +71,12 @@ def claims_cf(ds) -> bool:
                     or UNITS_VARIABLE in var.attrs):
                 return False
     return True
+
+
+def has_units_per_element(ds, name: str) -> bool:
+    """Whether variable ``name`` of ``ds`` has units per element: no ``units``, and ``units_variable`` naming a
+    string variable of ``ds`` along one of its dimensions (what the entries are is for a units library to judge)."""
+    var = ds.variables[name]
+    holder = ds.variables.get(var.attrs.get(UNITS_VARIABLE))
+    return ("units" not in var.attrs and holder is not None and holder.ndim == 1 and holder.dtype.kind in "UO"
+            and holder.dims[0] in var.dims)

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .cf_metadata import UNITS_VARIABLE
+from .cf_metadata import UNITS_VARIABLE, has_units_per_element
 from .errors import SchemaError
 
 __all__ = ["Variable", "DatasetSchema", "ANY"]
@@ -101,19 +101,16 @@ class DatasetSchema:
 
     @staticmethod
     def _check_units_variable(ds: xr.Dataset, name: str, expected: str, where: str) -> None:
-        var = ds[name]
-        found = var.attrs.get(UNITS_VARIABLE)
+        found = ds[name].attrs.get(UNITS_VARIABLE)
         if found != expected:
             raise SchemaError(f"{where} variable {name!r}: expected attrs[{UNITS_VARIABLE!r}] = {expected!r} (units "
                               f"per element), found {found!r}")
-        if "units" in var.attrs:
-            raise SchemaError(f"{where} variable {name!r}: has units per element ({expected!r}) and also "
-                              f"attrs['units'] = {var.attrs['units']!r}; it must have one or the other")
-        units = ds.variables.get(expected)
-        if units is None or units.dtype.kind not in "UO" or units.ndim != 1 or units.dims[0] not in var.dims:
-            raise SchemaError(f"{where} variable {name!r}: its units variable {expected!r} must be a string variable "
-                              f"along one of its dims {tuple(var.dims)}, found "
-                              f"{None if units is None else (units.dims, str(units.dtype))}")
+        if not has_units_per_element(ds, name):
+            units = ds.variables.get(expected)
+            raise SchemaError(f"{where} variable {name!r}: units per element need no attrs['units'] (found "
+                              f"{ds[name].attrs.get('units')!r}) and {expected!r} a string variable along one of its "
+                              f"dims {tuple(ds[name].dims)} (found "
+                              f"{None if units is None else (units.dims, str(units.dtype))})")
 
     def annotate(self, ds: xr.Dataset) -> xr.Dataset:
         """A shallow copy of ``ds`` with each declared variable's ``long_name`` and ``units_variable`` written into its

@@ -126,6 +126,11 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
         detail = ", ".join(f"{e}/{v} {float(per.sel(experiment=e, objective=v)):.4f}"
                            for e in per["experiment"].values for v in per["objective"].values)
         lines.append(f"generation {int(g)}: sigma_loss = {float(cal['sigma_loss'].sel(checkpoint=g)):.4f} ({detail})")
+    lines.append(f"held-out misfit over the {cal.attrs['heldout_consistent_count']} of {cal.sizes['pareto']} Pareto "
+                 f"points the training data do not reject against the front's best: "
+                 f"{cal.attrs['sigma_loss_consistent']:.4f} (whole front, Algorithm 3: {cal.attrs['sigma_loss_final']:.4f})")
+    if "front_outside_region_warning" in cal.attrs:
+        lines.append(f"note: {cal.attrs['front_outside_region_warning']}")
     lines.append(f"parameter   prior range               calibrated (Pareto)       noise-consistent "
                  f"({cal.attrs['confidence_level']:.0%} likelihood-ratio region)")
     for name in cal["param"].values:

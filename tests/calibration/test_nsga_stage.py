@@ -214,6 +214,23 @@ def test_history_snapshots_and_checkpoints_follow_algorithm_3(space, bundled):
     assert float(out["sigma_loss"].sel(checkpoint=8)) == pytest.approx(float(out["heldout_misfit"].mean()))
 
 
+def test_heldout_misfit_over_the_consistent_pareto_points(space, bundled):
+    """Each Pareto point's training χ² is at least the region's minimum; the flags follow the likelihood-ratio
+    threshold against the region's minimum and against the front's best point, and sigma_loss_consistent averages
+    the held-out misfits of the front-consistent points only."""
+    surrogate, observations = _conflicting(space, bundled)
+    out = _small_run().run(CTX, surrogate=surrogate.to_dataset(), observations=observations, space=space)
+    chi2, chi2_min, limit = out["pareto_chi2"].values, out.attrs["confidence_chi2_min"], out.attrs["confidence_threshold"]
+    assert np.all(chi2 >= chi2_min * (1 - 1e-9))
+    np.testing.assert_array_equal(out["pareto_noise_consistent"].values, chi2 - chi2_min <= limit)
+    kept = chi2 - chi2.min() <= limit
+    np.testing.assert_array_equal(out["pareto_front_consistent"].values, kept)
+    assert 1 <= out.attrs["heldout_consistent_count"] == int(kept.sum())
+    per_point = out["heldout_misfit"].values.reshape(out.sizes["pareto"], -1)
+    assert out.attrs["sigma_loss_consistent"] == pytest.approx(per_point[kept].mean())
+    assert ("front_outside_region_warning" in out.attrs) == (not out["pareto_noise_consistent"].values.any())
+
+
 def test_run_stops_at_the_first_checkpoint_where_sigma_loss_is_below_tolerance(space, bundled):
     surrogate, observations = _conflicting(space, bundled)
     full = _small_run().run(CTX, surrogate=surrogate.to_dataset(), observations=observations, space=space)

@@ -150,3 +150,19 @@ def test_a_small_real_run_writes_what_it_claims(tmp_path):
         else:
             assert problems == [] and idata[group].attrs["Conventions"] == CONVENTIONS, group
     assert np.isfinite(idata.log_likelihood["y"].values).all()
+
+
+def test_the_schema_accepts_units_per_element_only_in_the_documented_form():
+    from spflow.core.errors import SchemaError
+    from spflow.core.schema import DatasetSchema, Variable
+
+    schema = DatasetSchema(variables={"x": Variable(("p",), units_variable="u", long_name="x")})
+    good = xr.Dataset({"x": ("p", [1.0, 2.0], {"units_variable": "u"}), "u": ("p", ["m", "s"])})
+    schema.validate(good, stage="t", port="out")
+    for bad, why in ((good.assign(x=("p", [1.0, 2.0])), "expected attrs\\['units_variable'\\] = 'u'"),
+                     (good.assign(x=("p", [1.0, 2.0], {"units_variable": "u", "units": "m"})), "found 'm'"),
+                     (good.drop_vars("u"), "found None\\)"),
+                     (good.assign(u=("q", ["m", "s"])), "along one of its dims")):
+        with pytest.raises(SchemaError, match=why):
+            schema.validate(bad, stage="t", port="out")
+    assert schema.annotate(good.assign(x=("p", [1.0, 2.0])))["x"].attrs == {"long_name": "x", "units_variable": "u"}

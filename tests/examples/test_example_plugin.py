@@ -103,3 +103,13 @@ def test_custom_pipeline_script_runs(installed, tmp_path, monkeypatch, capsys):
         ["--samples", "3", "--cells", "20", "--jobs", "1"])
     out = capsys.readouterr().out
     assert "executed 6 node(s)" in out and "water_wet" in out
+
+
+def test_the_example_stage_passes_the_conformance_kit(installed):
+    from spflow.testing import STAGE_CHECKS, check_stage
+    from spflow.testing.small_inputs import small_design, small_responses, small_space
+
+    responses = small_responses(small_design(small_space(), samples=3), experiments=("BCF2",))
+    report = check_stage(spflow.get_registry().stage("breakthrough"), {"responses": responses},
+                         params={"fraction": 0.4})
+    assert report.passed == list(STAGE_CHECKS)

@@ -25,7 +25,7 @@ __all__ = ["ParetoDesign"]
 
 class ParetoDesign(Stage):
     name = "pareto_design"
-    version = "2"
+    version = "3"
     description = "the Pareto sets of an nsga2_calibration at stored generations, as one design"
     inputs = {"calibration": NSGA2_CALIBRATION}
     output = DESIGN
@@ -48,5 +48,5 @@ class ParetoDesign(Stage):
         values = np.concatenate(fronts)
         return ParameterMap.of(calibration).design(
             values, attrs={"design": f"Pareto sets of generations {wanted}"},
-            param_unit=("param", calibration["param_unit"].values),
+            units=calibration["param_unit"].values.astype(str).tolist(),
             generation=("sample", np.repeat(wanted, [len(f) for f in fronts])))
