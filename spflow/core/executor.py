@@ -39,6 +39,7 @@ import networkx as nx
 import xarray as xr
 
 from .cache import Store
+from .cf_metadata import CONVENTIONS, claims_cf
 from .errors import CacheError, CacheIntegrityWarning, CacheWarning, PipelineError, SchemaError, StageError
 from .pipeline import Pipeline
 from .plugins import get_registry
@@ -355,7 +356,10 @@ class _NodeOps:
                 raise StageError(name, stage.name,
                                  f"run() must return an xarray.Dataset, returned {type(out).__name__}")
             if stage.output is not None:
+                out = stage.output.annotate(out)
                 stage.output.validate(out, stage=stage.name, port="output")
+            if claims_cf(out):
+                out = out.assign_attrs(Conventions=CONVENTIONS)
             meta = dict(self.plan.prov[name], node=name, pipeline=self.plan.pipeline.name, seconds=round(seconds, 6))
             self.store.save(self.plan.keys[name], out, meta, where=f"node {name!r} (stage {stage.name!r}) output")
         except Exception as exc:

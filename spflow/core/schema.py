@@ -1,8 +1,8 @@
 """Declared schemas for the xarray Datasets that flow between stages.
 
 A schema lists the dimensions a Dataset must have and, per variable, its dimensions, dtype kind and unit
-(``attrs["units"]``). The executor validates every stage input before ``run`` and every output before it is
-stored; a violation raises :class:`~spflow.core.errors.SchemaError` naming the stage, the port, the variable and what
+(``attrs["units"]``, or units per element along a dimension: :mod:`spflow.core.cf_metadata`). The executor
+validates every stage input before ``run`` and every output before it is stored; a violation raises :class:`~spflow.core.errors.SchemaError` naming the stage, the port, the variable and what
 was expected versus found.
 
 We keep this small module instead of ``pandera.xarray``: our contract needs only dims, dtype kinds and units, and we
@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .cf_metadata import UNITS_VARIABLE, has_units_per_element
 from .errors import SchemaError
 
 __all__ = ["Variable", "DatasetSchema", "ANY"]
@@ -35,6 +36,10 @@ class Variable:
     (``"f"`` float, ``"i"`` integer, ``"fi"`` either, ``"U"`` string …). ``units`` is the required
     ``attrs["units"]`` (``None`` = not checked; ``""`` = must be present, any value). ``required=False`` makes the
     variable optional, but when present it must match. Float variables must be finite unless ``allow_nan``.
+    ``units_variable`` declares units that differ along a dimension (:mod:`spflow.core.cf_metadata`): the variable
+    has no ``units`` attribute but ``attrs["units_variable"]`` naming that string variable, which must exist along
+    one of the variable's dims. ``long_name`` is the CF ``long_name`` the variable is written with
+    (:meth:`DatasetSchema.annotate`).
     """
 
     dims: tuple[str, ...] | None
@@ -43,6 +48,8 @@ class Variable:
     required: bool = True
     allow_nan: bool = False
     doc: str = ""
+    long_name: str = ""
+    units_variable: str | None = None
 
 
 @dataclass(frozen=True)
@@ -87,14 +94,43 @@ class DatasetSchema:
                     raise SchemaError(f"{where} variable {name!r}: expected attrs['units'] = {spec.units!r}, found no units")
                 if spec.units and found != spec.units:
                     raise SchemaError(f"{where} variable {name!r}: expected units {spec.units!r}, found {found!r}")
+            if spec.units_variable is not None:
+                self._check_units_variable(ds, name, spec.units_variable, where)
             if values and var.dtype.kind == "f" and not spec.allow_nan and not np.isfinite(var.values).all():
                 raise SchemaError(f"{where} variable {name!r}: expected finite values, found NaN or inf")
+
+    @staticmethod
+    def _check_units_variable(ds: xr.Dataset, name: str, expected: str, where: str) -> None:
+        found = ds[name].attrs.get(UNITS_VARIABLE)
+        if found != expected:
+            raise SchemaError(f"{where} variable {name!r}: expected attrs[{UNITS_VARIABLE!r}] = {expected!r} (units "
+                              f"per element), found {found!r}")
+        if not has_units_per_element(ds, name):
+            units = ds.variables.get(expected)
+            raise SchemaError(f"{where} variable {name!r}: units per element need no attrs['units'] (found "
+                              f"{ds[name].attrs.get('units')!r}) and {expected!r} a string variable along one of its "
+                              f"dims {tuple(ds[name].dims)} (found "
+                              f"{None if units is None else (units.dims, str(units.dtype))})")
+
+    def annotate(self, ds: xr.Dataset) -> xr.Dataset:
+        """A shallow copy of ``ds`` with each declared variable's ``long_name`` and ``units_variable`` written into its
+        attrs where it has none (the executor annotates every output before validating and storing it)."""
+        ds = ds.copy(deep=False)
+        for name, spec in self.variables.items():
+            if name in ds.variables:
+                attrs = ds.variables[name].attrs
+                if spec.long_name:
+                    attrs.setdefault("long_name", spec.long_name)
+                if spec.units_variable is not None:
+                    attrs.setdefault(UNITS_VARIABLE, spec.units_variable)
+        return ds
 
     def describe(self) -> str:
         """One line per variable, for ``spflow list``."""
         lines = [f"dims {list(self.dims)}"] if self.dims else []
         for name, spec in self.variables.items():
-            unit = f" [{spec.units}]" if spec.units else ""
+            unit = f" [{spec.units}]" if spec.units else f" [units in {spec.units_variable}]" if spec.units_variable \
+                else ""
             opt = "" if spec.required else " (optional)"
             lines.append(f"{name}{tuple(spec.dims) if spec.dims is not None else ''}{unit}{opt}")
         return "; ".join(lines)

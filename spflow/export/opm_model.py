@@ -9,8 +9,9 @@ with :func:`~spflow.export.opm_deck.write_opm_deck`:
 2. one or more parameter sets: ``params`` (a mapping or a TOML/JSON file, flat ``{NAME = value}`` or with
    ``[parameters]``/``[effects]`` tables), ``calibration`` (the ``nsga2_calibration`` stage's Dataset or netCDF file:
    its ``confidence_best``, the design of the minimum χ² under the lab's measurement-error model, i.e. the
-   noise-consistent best point) and ``posterior`` (an MCMC stage's Dataset or file: draw ``draw`` of the chain-major
-   flattened ``theta``, or ``"mean"``, the posterior mean over every chain and draw);
+   noise-consistent best point) and ``posterior`` (an MCMC stage's Dataset or file, or the InferenceData file
+   ``spflow run bayesian_calibration`` writes: draw ``draw`` of the chain-major flattened ``theta``, or ``"mean"``,
+   the posterior mean over every chain and draw);
 3. explicit ``schedule`` and ``effects``.
 
 A later layer overrides an earlier one and the override is recorded with both sources; two parameter sets giving
@@ -33,6 +34,7 @@ import numpy as np
 import xarray as xr
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.calibration.inference_data import read_posterior
 from spflow.plugins.design.parameter_map import NAMES_VAR, ParameterMap
 from spflow.plugins.forward import effects as E
 from spflow.plugins.forward.parameters import PARAMETERS
@@ -138,7 +140,9 @@ def load_parameter_file(path, what: str = "--params") -> tuple[dict, dict]:
     return dict(data), {}
 
 
-def _dataset(source, what: str, needs: tuple[str, ...], stages: str) -> tuple[xr.Dataset, str]:
+def _dataset(source, what: str, needs: tuple[str, ...], stages: str, grouped=None) -> tuple[xr.Dataset, str]:
+    """The Dataset ``source`` (or the netCDF file it names) with the variables ``needs``; ``grouped(path)`` reads a
+    file whose root group lacks them (a file of netCDF groups, e.g. ArviZ InferenceData)."""
     if isinstance(source, xr.Dataset):
         ds, where = source, f"{what} (Dataset)"
     else:
@@ -151,6 +155,9 @@ def _dataset(source, what: str, needs: tuple[str, ...], stages: str) -> tuple[xr
         except (OSError, ValueError) as exc:
             raise ParameterError(f"{where}: not a readable netCDF file ({exc})") from None
     missing = [v for v in needs if v not in ds.variables]
+    if missing and grouped is not None and not isinstance(source, xr.Dataset) and not ds.variables:
+        ds = grouped(source)
+        missing = [v for v in needs if v not in ds.variables]
     if missing:
         raise ParameterError(f"{where}: no variable(s) {missing}; expected the output of {stages} with "
                              f"{list(needs)}")
@@ -192,7 +199,8 @@ def posterior_parameters(posterior, draw, study=None) -> tuple[dict[str, float],
     """A posterior sample of an MCMC stage's result (Dataset or netCDF file): ``draw`` = an index into the
     chain-major flattened draws (chain ``draw // n_draw``, draw ``draw % n_draw``), or ``"mean"``, the posterior
     mean over every chain and draw. Returns the parameters and a description of the source."""
-    ds, where = _dataset(posterior, "--posterior", ("theta", "param"), "an MCMC stage (emcee_sampler, mh_sampler)")
+    ds, where = _dataset(posterior, "--posterior", ("theta", "param"), "an MCMC stage (emcee_sampler, mh_sampler)",
+                         grouped=read_posterior)
     theta = ds["theta"].transpose("chain", "draw", "param").values.astype(float)
     n_chain, n_draw = theta.shape[:2]
     flat = theta.reshape(-1, theta.shape[-1])

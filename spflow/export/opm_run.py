@@ -115,7 +115,7 @@ def summary_to_series(summary: dict[str, np.ndarray], deck: OpmDeck) -> xr.Datas
     attrs = {f"param_{k}": v for k, v in deck.params.items()}
     attrs.update(generator="OPM Flow (spflow.export.opm_run.summary_to_series)", cells=deck.cells,
                  opm_notes="\n".join(deck.notes))
-    return xr.Dataset(data, coords={"pv": ("pv", pv, {"units": "PV", "long_name": "injected pore volumes"})},
+    return xr.Dataset(data, coords={"pv": ("pv", pv, {"units": "1", "long_name": "injected pore volumes"})},
                       attrs=attrs)
 
 

@@ -51,7 +51,7 @@ _ALLOWED = ("dp", "recovery", *_AVERAGED)
 #: Schema of measured data on the simulator grid.
 OBSERVATIONS = DatasetSchema(
     dims=("experiment", "pv"),
-    variables={"total_pv": Variable(("experiment",), units="PV")},
+    variables={"total_pv": Variable(("experiment",), units="1", long_name="pore volumes injected in the coreflood")},
     doc="measured corefloods on the simulator's output grid",
 )
 
@@ -126,7 +126,7 @@ def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, st
 
 class Observations(Stage):
     name = "observations"
-    version = "3"
+    version = "4"
     description = "measured corefloods (bundled names or files) on the simulator's output grid"
     output = OBSERVATIONS
     params = {
@@ -175,13 +175,15 @@ class Observations(Stage):
             for name, series in on_simulator_grid(at_core_outlet(ds, float(shifts[i])), variables, own, step).items():
                 values[name][i, positions[i]] = series
         out = xr.Dataset(
-            {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1]}) for name, v in values.items()}
-            | {"total_pv": ("experiment", totals, {"units": "PV"}),
-               "dead_volume_pv": ("experiment", shifts, {"units": "PV", "long_name": "outlet dead volume the "
+            {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1], "long_name": f"observed {VARIABLES[name][2]}"
+                                                                            " on the simulator grid"})
+             for name, v in values.items()}
+            | {"total_pv": ("experiment", totals, {"units": "1"}),
+               "dead_volume_pv": ("experiment", shifts, {"units": "1", "long_name": "outlet dead volume the "
                                                           "effluent series were moved back by"})},
-            coords={"experiment": names, "pv": grid},
+            coords={"experiment": ("experiment", names, {"long_name": "coreflood"}),
+                    "pv": ("pv", grid, {"units": "1", "long_name": "injected pore volumes"})},
             attrs={"pv_step": step, "sources": " ".join(map(source_label, self.params["experiments"])),
                    "coreflood_attrs": json.dumps({n: _json_attrs(ds.attrs) for n, ds in zip(names, data)})},
         )
-        out["pv"].attrs["units"] = "PV"
         return out

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import has_units_per_element
 from spflow.core.errors import SpflowError
 from spflow.core.params import Param, validate_params
 from spflow.core.schema import DatasetSchema, Variable
@@ -75,7 +76,8 @@ STAGE_CHECKS = {c.name: c for c in (
     Check("output_schema", "the result matches the declared output schema",
           "make run() produce every declared variable with the declared dims, dtype kind, units and finiteness, or "
           "correct the declaration (allow_nan=True for documented NaN)"),
-    Check("output_units", "every numeric data variable of the result has a 'units' attribute",
+    Check("output_units", "every numeric data variable of the result has a 'units' attribute (or units per element: "
+          "'units_variable' naming a string variable of units along one of its dims, docs/architecture.md)",
           "set attrs['units'] to a UDUNITS string on each numeric variable ('1' for dimensionless)"),
     Check("purity", "run() leaves its inputs unchanged", "work on copies (ds.copy(deep=True)) or build new arrays; "
           "never assign into input arrays or their attrs"),
@@ -241,7 +243,8 @@ class _StageRun:
 
     def output_units(self) -> None:
         bare = [str(n) for n, v in self.result.data_vars.items()
-                if v.dtype.kind in "iufc" and not isinstance(v.attrs.get("units"), str)]
+                if v.dtype.kind in "iufc" and not isinstance(v.attrs.get("units"), str)
+                and not has_units_per_element(self.result, n)]
         if bare:
             raise Broken(f"numeric variables without a 'units' attribute: {bare}")
 

@@ -59,9 +59,9 @@ def observations_for(index: OutputIndex, values: np.ndarray) -> xr.Dataset:
     for k in range(len(index)):
         data[index.variable[k]][experiments.index(index.experiment[k]), np.searchsorted(grid, index.pv[k])] = values[k]
     ds = xr.Dataset({v: (("experiment", "pv"), d, {"units": index.units[v]}) for v, d in data.items()}
-                    | {"total_pv": ("experiment", np.full(len(experiments), grid[-1]), {"units": "PV"})},
+                    | {"total_pv": ("experiment", np.full(len(experiments), grid[-1]), {"units": "1"})},
                     coords={"experiment": experiments, "pv": grid})
-    ds["pv"].attrs["units"] = "PV"
+    ds["pv"].attrs["units"] = "1"
     return ds
 
 

@@ -48,7 +48,7 @@ def test_series_variables_units_and_long_names(bcf1):
         assert bcf1[var].attrs["units"] == unit
         assert bcf1[var].attrs["long_name"]
         assert bcf1[var].attrs["sampling"]
-    assert bcf1.pv.attrs["units"] == "PV"
+    assert bcf1.pv.attrs["units"] == "1"  # injected pore volumes: a volume ratio (UDUNITS reads "PV" as petavolt)
 
 
 def test_profiles_layout(bcf1):

@@ -48,7 +48,7 @@ def _truth(x):
 def _responses(x):
     data = _truth(x)
     ds = xr.Dataset({name: (("sample", "experiment", "pv"), v, {"units": RESPONSE_UNITS[name]})
-                     for name, v in data.items()} | {"total_pv": ("experiment", [1.5, 1.0], {"units": "PV"})},
+                     for name, v in data.items()} | {"total_pv": ("experiment", [1.5, 1.0], {"units": "1"})},
                     coords={"sample": np.arange(len(x)), "experiment": ["BCF1", "BCF2"], "pv": PV})
     RESPONSES.validate(ds, stage="test", port="responses")
     return ds

@@ -53,7 +53,7 @@ def _responses(x):
     truth = _model(x)
     data = {name: truth.get(name, np.zeros((len(x), PV.size)))[:, None, :] for name in RESPONSE_UNITS}
     ds = xr.Dataset({name: (("sample", "experiment", "pv"), v, {"units": RESPONSE_UNITS[name]})
-                     for name, v in data.items()} | {"total_pv": ("experiment", [PV[-1]], {"units": "PV"})},
+                     for name, v in data.items()} | {"total_pv": ("experiment", [PV[-1]], {"units": "1"})},
                     coords={"sample": np.arange(len(x)), "experiment": ["BCF1"], "pv": PV})
     RESPONSES.validate(ds, stage="test", port="responses")
     return ds

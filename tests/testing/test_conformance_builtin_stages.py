@@ -26,9 +26,6 @@ KNOWN_GAPS = {
     **{name: {"output_units"} for name in ("fit_adsorption", "fit_desaturation", "fit_ift", "fit_me_viscosity",
                                            "fit_phase_behaviour", "fit_polymer_coreflood", "fit_polymer_rheology",
                                            "fit_tracer")},
-    # posterior_dataset: the integer 'block_points' count has no units attr ('1')
-    "emcee_sampler": {"output_units"},
-    "mh_sampler": {"output_units"},
 }
 
 

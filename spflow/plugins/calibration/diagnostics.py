@@ -40,6 +40,7 @@ import numpy as np
 import xarray as xr
 from scipy.stats import norm
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 
 __all__ = ["arviz", "integrated_time", "geweke", "geweke_familywise", "geweke_intervals", "autocorrelation",
@@ -154,10 +155,18 @@ def summary(posterior: xr.Dataset, variable: str = "theta", dim: str = "param") 
         },
         coords={dim: da[dim].values},
     )
-    units = {"mean": da.attrs.get("units", ""), "sd": da.attrs.get("units", ""), "q025": da.attrs.get("units", ""),
-             "q500": da.attrs.get("units", ""), "q975": da.attrs.get("units", ""), "rhat": "1", "ess_bulk": "draws",
-             "ess_tail": "draws", "tau_int": "draws", "geweke_z": "1"}
-    for name, unit in units.items():
-        out[name].attrs["units"] = unit
+    # the statistics of the draws are in the draws' units (one, or per element: the unit variable comes along)
+    same = {k: da.attrs[k] for k in ("units", UNITS_VARIABLE) if k in da.attrs}
+    if same.get(UNITS_VARIABLE) in posterior.variables:
+        out[same[UNITS_VARIABLE]] = posterior[same[UNITS_VARIABLE]]
+    else:
+        same.pop(UNITS_VARIABLE, None)
+    names = {"mean": "posterior mean", "sd": "posterior standard deviation", "q025": "2.5 % posterior quantile",
+             "q500": "posterior median", "q975": "97.5 % posterior quantile", "rhat": "rank-normalised split R-hat",
+             "ess_bulk": "bulk effective sample size", "ess_tail": "tail effective sample size",
+             "tau_int": "integrated autocorrelation time, in kept draws", "geweke_z": "Geweke z-score"}
+    for name, long_name in names.items():
+        out[name].attrs = dict(same if name in ("mean", "sd", "q025", "q500", "q975") else {"units": "1"},
+                               long_name=long_name)
     out.attrs.update({f"geweke_{k}": v for k, v in geweke_familywise(out["geweke_z"].values).items()})
     return out

@@ -54,7 +54,7 @@ def initial_points(model: PosteriorModel, count: int, how: str, draws: int, rng:
 
 class EmceeSampler(SamplerStage):
     name = "emcee_sampler"
-    version = "2"
+    version = "3"
     description = "emcee ensemble MCMC on a surrogate posterior (thesis §4.6, Eqs. 4.1-4.5)"
     params = SamplerStage.common_params | {
         "walkers": Param(int, 0, bounds=(0, 4096), doc="walkers per run, >= 2 x sampled dimensions (0: exactly that)"),
@@ -111,8 +111,10 @@ class EmceeSampler(SamplerStage):
 
     def _chain_coords(self, results: list[ChainResult]) -> dict:
         walkers = results[0]["x"].shape[0]
-        return {"chain_run": ("chain", np.repeat(np.arange(len(results)), walkers)),
-                "chain_walker": ("chain", np.tile(np.arange(walkers), len(results)))}
+        return {"chain_run": ("chain", np.repeat(np.arange(len(results)), walkers),
+                              {"units": "1", "long_name": "independent run the walker belongs to"}),
+                "chain_walker": ("chain", np.tile(np.arange(walkers), len(results)),
+                                 {"units": "1", "long_name": "walker number within its run"})}
 
     def _attrs(self, results: list[ChainResult]) -> dict:
         walkers = results[0]["x"].shape[0]

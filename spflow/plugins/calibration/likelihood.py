@@ -133,6 +133,36 @@ class PosteriorModel:
         """emcee's vectorised log-probability: rows of (log posterior, log likelihood) — the second is a blob."""
         return np.column_stack(self.evaluate(x))
 
+    def pointwise_log_likelihood(self, theta: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+        """log N(d_k; f_k(θ), σ_i² + v_k(θ)) of every observation k (rows, n_observations) at joint draws of θ
+        (rows, n_theta) and σ (rows, n_blocks): Eq. 4.3 term by term, observations in block order (``pairs``).
+
+        Summed over k it is the log likelihood that ``evaluate`` records for known or sampled σ_i; with σ_i
+        integrated out (``jeffreys_marginal``) ``evaluate`` records the marginal, which does not split into terms
+        per observation, and this is the likelihood conditional on the draw's σ_i from p(σ_i | θ, d)
+        (:meth:`noise_draws`) — the pointwise form that PSIS-LOO needs."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        sigma = np.atleast_2d(np.asarray(sigma, dtype=float))
+        if sigma.shape != (theta.shape[0], len(self.pairs)):
+            raise ParameterError(f"pointwise log likelihood: sigma needs shape ({theta.shape[0]}, {len(self.pairs)}) "
+                                 f"(rows, blocks {self.pairs}), got {sigma.shape}")
+        terms = []
+        for i, (r, v) in enumerate(self._blocks(theta)):
+            total = sigma[:, i, None] ** 2 + (0.0 if v is None else v)
+            terms.append(-0.5 * (_LOG_2PI + np.log(total) + r * r / total))
+        return np.concatenate(terms, axis=1)
+
+    def predictive_draws(self, theta: np.ndarray, sigma: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """New observations (rows, n_observations) drawn from Eq. 4.3 with the surrogate for the forward model:
+        d_k ~ N(f_k(θ), σ_i² + v_k(θ)) at each joint draw of θ and σ, observations in block order."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        out = []
+        for i, (r, v) in enumerate(self._blocks(theta)):
+            mean = self.observed[i] - r
+            sd = np.sqrt(sigma[:, i, None] ** 2 + (0.0 if v is None else v))
+            out.append(mean + sd * rng.standard_normal(mean.shape))
+        return np.concatenate(out, axis=1)
+
     def noise_draws(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """σ_i (rows, n_blocks) for each coordinate row: read off when sampled or known, drawn from p(σ_i | θ, d)
         when marginalised (exact joint draws of (θ, σ))."""

@@ -50,7 +50,7 @@ class ParetoDesign(Stage):
         values = np.concatenate(fronts)
         return ParameterMap.of(calibration).design(
             values, attrs={"design": f"Pareto sets of generations {wanted}"},
-            param_unit=("param", calibration["param_unit"].values),
+            units=calibration["param_unit"].values.astype(str).tolist(),
             generation=("sample", np.repeat(wanted, [len(f) for f in fronts])))
 
 

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE, udunits
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
@@ -63,35 +64,50 @@ if TYPE_CHECKING:
 
 __all__ = ["NSGA2Calibration", "NSGA2_CALIBRATION"]
 
-_PER_PARAM = "per-parameter (see param_unit)"
-_PER_OBJECTIVE = "per-objective (see objective_unit)"
+#: Units per element (:mod:`spflow.core.cf_metadata`): of each parameter, of each objective.
+_PER_PARAM = {UNITS_VARIABLE: "param_unit"}
+_PER_OBJECTIVE = {UNITS_VARIABLE: "objective_unit"}
 
 #: Schema of the stage's output (what the Pareto-design stage and the figures read).
 NSGA2_CALIBRATION = DatasetSchema(
     dims=("pareto", "param", "objective", "generation", "snapshot", "member", "checkpoint", "experiment"),
     variables={
-        "designs": Variable(("pareto", "param"), units=_PER_PARAM),
-        "objectives": Variable(("pareto", "objective"), units=_PER_OBJECTIVE),
-        "heldout_misfit": Variable(("pareto", "experiment", "objective"), units="1"),
-        "n_front": Variable(("generation",), kind="i", units="1"),
-        "hypervolume": Variable(("generation",), units="1"),
-        "best_objectives": Variable(("generation", "objective"), units=_PER_OBJECTIVE),
-        "front_size": Variable(("snapshot",), kind="i", units="1"),
-        "front_designs": Variable(("snapshot", "member", "param"), units=_PER_PARAM, allow_nan=True),
-        "front_objectives": Variable(("snapshot", "member", "objective"), units=_PER_OBJECTIVE, allow_nan=True),
-        "sigma_loss": Variable(("checkpoint",), units="1"),
-        "checkpoint_misfit": Variable(("checkpoint", "experiment", "objective"), units="1"),
-        "prior_lower": Variable(("param",), units=_PER_PARAM),
-        "prior_upper": Variable(("param",), units=_PER_PARAM),
-        "calibrated_lower": Variable(("param",), units=_PER_PARAM),
-        "calibrated_upper": Variable(("param",), units=_PER_PARAM),
-        "confidence_lower": Variable(("param",), units=_PER_PARAM),
-        "confidence_upper": Variable(("param",), units=_PER_PARAM),
-        "confidence_best": Variable(("param",), units=_PER_PARAM),
-        "confidence_count": Variable((), kind="i", units="1"),
-        "pareto_chi2": Variable(("pareto",), units="1"),
-        "pareto_noise_consistent": Variable(("pareto",), kind="b", units="1"),
-        "pareto_front_consistent": Variable(("pareto",), kind="b", units="1"),
+        "designs": Variable(("pareto", "param"), units_variable="param_unit",
+                            long_name="parameters of the final Pareto front"),
+        "objectives": Variable(("pareto", "objective"), units_variable="objective_unit",
+                               long_name="training misfits of the final Pareto front"),
+        "heldout_misfit": Variable(("pareto", "experiment", "objective"), units="1",
+                                   long_name="held-out misfits of the final Pareto front"),
+        "n_front": Variable(("generation",), kind="i", units="1", long_name="size of the Pareto front per generation"),
+        "hypervolume": Variable(("generation",), units="1", long_name="hypervolume of the front per generation"),
+        "best_objectives": Variable(("generation", "objective"), units_variable="objective_unit",
+                                    long_name="best misfit per objective and generation"),
+        "front_size": Variable(("snapshot",), kind="i", units="1", long_name="size of each front snapshot"),
+        "front_designs": Variable(("snapshot", "member", "param"), units_variable="param_unit",
+                                  long_name="parameters of each front snapshot", allow_nan=True),
+        "front_objectives": Variable(("snapshot", "member", "objective"), units_variable="objective_unit",
+                                     long_name="misfits of each front snapshot", allow_nan=True),
+        "sigma_loss": Variable(("checkpoint",), units="1", long_name="mean held-out misfit at each checkpoint"),
+        "checkpoint_misfit": Variable(("checkpoint", "experiment", "objective"), units="1",
+                                      long_name="held-out misfits at each checkpoint"),
+        "prior_lower": Variable(("param",), units_variable="param_unit", long_name="lower end of the prior box"),
+        "prior_upper": Variable(("param",), units_variable="param_unit", long_name="upper end of the prior box"),
+        "calibrated_lower": Variable(("param",), units_variable="param_unit",
+                                     long_name="lowest value on the final front"),
+        "calibrated_upper": Variable(("param",), units_variable="param_unit",
+                                     long_name="highest value on the final front"),
+        "confidence_lower": Variable(("param",), units_variable="param_unit",
+                                     long_name="lower end of the noise-consistent range"),
+        "confidence_upper": Variable(("param",), units_variable="param_unit",
+                                     long_name="upper end of the noise-consistent range"),
+        "confidence_best": Variable(("param",), units_variable="param_unit", long_name="minimum-chi2 design"),
+        "confidence_count": Variable((), kind="i", units="1", long_name="designs inside the noise-consistent region"),
+        "pareto_chi2": Variable(("pareto",), units="1",
+                                long_name="training chi2 of each Pareto point under the measurement-error model"),
+        "pareto_noise_consistent": Variable(("pareto",), kind="b", units="1",
+                                            long_name="Pareto point inside the noise-consistent region"),
+        "pareto_front_consistent": Variable(("pareto",), kind="b", units="1",
+                                            long_name="Pareto point the training data do not reject"),
     },
     attrs=("training", "undetermined", "generations_run", "stop_reason", "confidence_level", "confidence_threshold",
            "confidence_chi2_min", "confidence_n_data", "confidence_noise_model", "confidence_fit_pvalue"),
@@ -111,7 +127,7 @@ def _squared_unit(unit: str) -> str:
 
 class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
-    version = "5"
+    version = "6"
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
     inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
@@ -268,7 +284,7 @@ class NSGA2Calibration(Stage):
     @staticmethod
     def _add_confidence(ds: xr.Dataset, region: ConfidenceRegion, noise: NoiseMisfit, archive_size: int):
         """``ds`` with the noise-consistent ranges and their definition (attrs ``confidence_*``)."""
-        per_param = {"units": _PER_PARAM}
+        per_param = _PER_PARAM
         dof = noise.n_data - ds.sizes["param"]
         from scipy import stats
 
@@ -317,7 +333,7 @@ class NSGA2Calibration(Stage):
             front_x[i, : len(x)], front_f[i, : len(f)] = x, f
         checks = sorted(history.checkpoints)
         misfit_final = history.checkpoints[last][order]
-        per_param, per_obj, one = {"units": _PER_PARAM}, {"units": _PER_OBJECTIVE}, {"units": "1"}
+        per_param, per_obj, one = _PER_PARAM, _PER_OBJECTIVE, {"units": "1"}
         ds = xr.Dataset(
             {
                 "designs": (("pareto", "param"), designs, per_param),
@@ -340,9 +356,11 @@ class NSGA2Calibration(Stage):
             coords={
                 "pareto": np.arange(len(designs)),
                 "param": names,
-                "param_unit": ("param", space["unit"].values.astype(str)),
+                "param_unit": ("param", np.array([udunits(u) for u in space["unit"].values]),
+                               {"long_name": "UDUNITS unit of each parameter"}),
                 "objective": list(p["variables"]),
-                "objective_unit": ("objective", objective_units),
+                "objective_unit": ("objective", np.array([udunits(u) for u in objective_units]),
+                                   {"long_name": "UDUNITS unit of each objective"}),
                 "generation": np.arange(1, last + 1),
                 "snapshot": np.array(snaps, dtype=np.int64),
                 "member": np.arange(width),
@@ -363,5 +381,5 @@ class NSGA2Calibration(Stage):
             },
         )
         for dim in ("generation", "snapshot", "checkpoint"):
-            ds[dim].attrs["units"] = "generation"
+            ds[dim].attrs.update(units="1", long_name=f"{dim}: NSGA-II generation number")
         return ds

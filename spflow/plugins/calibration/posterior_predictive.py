@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE, udunits
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema
@@ -58,7 +59,7 @@ def _on_grid(series: xr.DataArray, grid: np.ndarray) -> np.ndarray:
 
 class PosteriorPredictive(Stage):
     name = "posterior_predictive"
-    version = "1"
+    version = "2"
     description = "simulator on posterior draws: quantile bands (model and with noise) and coverage of observations"
     inputs = {"posterior": POSTERIOR, "space": SPACE, "observations": OBSERVATIONS}
     optional_inputs = frozenset({"observations"})
@@ -114,9 +115,15 @@ class PosteriorPredictive(Stage):
                              axis=1)
             model = ensemble[variable]
             noise = sigma[:, :, None] * rng.standard_normal(model.shape)
-            ensemble[f"{variable}_predictive"] = (model.dims, model.values + noise, dict(model.attrs))
+            label = model.attrs.get("long_name", variable)
+            ensemble[f"{variable}_predictive"] = (model.dims, model.values + noise,
+                                                  dict(model.attrs, long_name=f"{label} with measurement noise"))
             noisy.append(variable)
-        ensemble["theta"] = (("sample", "param"), theta[rows], {"units": "per-parameter (see space unit)"})
+        ensemble["theta"] = (("sample", "param"), theta[rows],
+                             {UNITS_VARIABLE: "param_unit", "long_name": "posterior draws of the parameters run"})
+        ensemble["param_unit"] = ("param", np.array([udunits(u) for u in posterior["unit"].values]),
+                                  {"long_name": "UDUNITS unit of each parameter's design column"})
+        ensemble["param"].attrs["long_name"] = "calibrated parameter (design column)"
         bands = Quantiles(levels=self.params["levels"]).run(ctx, ensemble=ensemble)
         bands.attrs.update(draws=int(rows.size), failed_draws=int(self.params["draws"] - rows.size),
                            band_low=min(self.params["levels"]),
@@ -142,5 +149,8 @@ class PosteriorPredictive(Stage):
                     ok = np.isfinite(y) & np.isfinite(lo) & np.isfinite(hi)
                     count.append(int(ok.sum()))
                     fraction.append(float(np.mean((y[ok] >= lo[ok]) & (y[ok] <= hi[ok]))) if ok.any() else np.nan)
-                bands[f"{prefix}_{variable}"] = ("experiment", np.array(fraction), {"units": "1"})
-                bands[f"points_{variable}"] = ("experiment", np.array(count), {"units": "1"})
+                which = "predictive (with noise)" if prefix == "coverage" else "model"
+                bands[f"{prefix}_{variable}"] = ("experiment", np.array(fraction), {
+                    "units": "1", "long_name": f"fraction of the {variable} observations inside the {which} band"})
+                bands[f"points_{variable}"] = ("experiment", np.array(count), {
+                    "units": "1", "long_name": f"{variable} observations compared with the band"})

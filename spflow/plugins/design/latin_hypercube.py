@@ -13,7 +13,7 @@ from spflow.plugins.design.schemas import DESIGN, SPACE
 
 class LatinHypercubeDesign(Stage):
     name = "lhs_design"
-    version = "2"
+    version = "3"
     description = "Latin hypercube sample of a parameter space"
     inputs = {"space": SPACE}
     output = DESIGN
@@ -30,4 +30,5 @@ class LatinHypercubeDesign(Stage):
         sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"], optimization=opt)
         unit = sampler.random(self.params["samples"])
         values = qmc.scale(unit, space["lower"].values, space["upper"].values)
-        return ParameterMap.of(space).design(values, attrs={"design": "latin hypercube", "seed": self.params["seed"]})
+        return ParameterMap.of(space).design(values, attrs={"design": "latin hypercube", "seed": self.params["seed"]},
+                                             units=space["unit"].values.tolist())

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 
 from .calibrated_parameter import CalibratedParameter
@@ -89,13 +90,23 @@ class ParameterMap:
                                  f"{have}")
         return ds.assign(self.variables())
 
-    def design(self, values, attrs: Mapping | None = None, **coords) -> xr.Dataset:
-        """A ``design`` Dataset (dims ``sample``, ``param``) of the rows ``values`` carrying this map; ``coords``:
-        extra coordinates (e.g. ``generation=("sample", ...)``)."""
+    def design(self, values, attrs: Mapping | None = None, units: Sequence[str] | None = None,
+               **coords) -> xr.Dataset:
+        """A ``design`` Dataset (dims ``sample``, ``param``) of the rows ``values`` carrying this map; ``units``: the
+        UDUNITS unit of each column (a space's ``unit``), recorded as ``unit`` with ``values`` in units per element
+        (:mod:`spflow.core.cf_metadata`) — without it ``values`` has no units; ``coords``: extra coordinates (e.g.
+        ``generation=("sample", ...)``)."""
         values = np.atleast_2d(np.asarray(values, dtype=float))
-        ds = xr.Dataset({"values": (("sample", "param"), values, {"units": "per-parameter (see the space's unit)"})},
-                        coords={"sample": np.arange(values.shape[0]), "param": list(self.labels), **coords},
+        ds = xr.Dataset({"values": (("sample", "param"), values, {"long_name": "design points"})},
+                        coords={"sample": ("sample", np.arange(values.shape[0]), {"units": "1",
+                                                                                "long_name": "sample number"}),
+                                "param": ("param", list(self.labels), {"long_name": "design column"}), **coords},
                         attrs=dict(attrs or {}))
+        if units is not None:
+            if len(units) != len(self.labels):
+                raise ParameterError(f"design: {len(units)} units for the columns {list(self.labels)}")
+            ds["unit"] = ("param", np.asarray([str(u) for u in units]), {"long_name": "UDUNITS unit of each column"})
+            ds["values"].attrs[UNITS_VARIABLE] = "unit"
         return ds.assign(self.variables())
 
     def forward_params(self, row) -> dict[str, float]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE, udunits
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
@@ -38,7 +39,7 @@ def _relative(name: str, relative: float) -> CalibratedParameter:
 
 class ParameterSpace(Stage):
     name = "parameter_space"
-    version = "2"
+    version = "3"
     description = "uniform bounds on calibrated parameters (UTCHEM names or labels of groups; explicit or ±relative)"
     output = SPACE
     params = {
@@ -75,16 +76,16 @@ class ParameterSpace(Stage):
         def column(p: CalibratedParameter, x: float) -> float:
             return float(np.log10(x)) if p.log else float(x)
 
-        per = {"units": "per-parameter (see unit)"}
+        per = {UNITS_VARIABLE: "unit"}
         space = xr.Dataset(
             {
                 "lower": ("param", [column(p, p.lower) for p in ps], per),
                 "upper": ("param", [column(p, p.upper) for p in ps], per),
                 "default": ("param", [column(p, min(max(p.default, p.lower), p.upper) if p.log else p.default)
                                       for p in ps], per),
-                "unit": ("param", np.array([log_unit(p.unit) if p.log else p.unit for p in ps])),
+                "unit": ("param", np.array([udunits(log_unit(p.unit) if p.log else p.unit) for p in ps])),
             },
-            coords={"param": [p.label for p in ps]},
+            coords={"param": ("param", [p.label for p in ps], {"long_name": "calibrated parameter (design column)"})},
             attrs={"distribution": "independent uniform"},
         )
         return ParameterMap.of_parameters(ps).attach(space)

@@ -7,27 +7,32 @@ from spflow.plugins.design.parameter_map import NAMES_VAR, SCALE_VAR
 #: column is the UTCHEM name it sets, on a linear scale.
 MAP_VARIABLES = {
     NAMES_VAR: Variable(("param",), kind="UO", required=False,
+                        long_name="forward-model (UTCHEM) parameters each column sets",
                              doc="forward-model (UTCHEM) parameters each column sets, separated by spaces"),
     SCALE_VAR: Variable(("param",), kind="UO", required=False,
+                        long_name="linear: the column is the value; log: the column is log10 of the value",
                       doc="linear: the column is the value; log: the column is log10 of the value"),
 }
 
 #: A box of uncertain forward-model parameters (dim ``param``; coordinate = column labels: UTCHEM names or labels of
-#: groups, with the parameter map).
+#: groups, with the parameter map). The bounds have units per element, ``unit`` (:mod:`spflow.core.cf_metadata`).
 SPACE = DatasetSchema(
     dims=("param",),
     variables={
-        "lower": Variable(("param",), units=None),
-        "upper": Variable(("param",), units=None),
-        "default": Variable(("param",), units=None),
-        "unit": Variable(("param",), kind="U"),
+        "lower": Variable(("param",), units_variable="unit", long_name="lower end of the range"),
+        "upper": Variable(("param",), units_variable="unit", long_name="upper end of the range"),
+        "default": Variable(("param",), units_variable="unit", long_name="default value"),
+        "unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each column"),
     } | MAP_VARIABLES,
     doc="uncertain parameters with uniform bounds",
 )
 
-#: Sample points in a parameter space (dims ``sample``, ``param``).
+#: Sample points in a parameter space (dims ``sample``, ``param``). With ``unit`` (a design drawn from a space),
+#: ``values`` has units per element; a design without it (hand-made, or from draws) carries no units.
 DESIGN = DatasetSchema(
     dims=("sample", "param"),
-    variables={"values": Variable(("sample", "param"), units=None)} | MAP_VARIABLES,
+    variables={"values": Variable(("sample", "param"), units=None, long_name="design points"),
+               "unit": Variable(("param",), kind="U", required=False, long_name="UDUNITS unit of each column")}
+    | MAP_VARIABLES,
     doc="design points",
 )

@@ -67,13 +67,14 @@ def build_dataset(series, profiles, totals, out_pv, prof_pv, cells, attrs) -> xr
         data[name] = xr.Variable(
             ("pv",), series[row] * scale, {"units": unit, "long_name": long_name, "sampling": sampling}
         )
-    coords = {"pv": ("pv", out_pv, {"units": "PV", "long_name": "injected pore volumes"})}
+    coords = {"pv": ("pv", out_pv, {"units": "1", "long_name": "injected pore volumes"})}
     if prof_pv.size:
         for name, row, unit, long_name, scale in PROFILE_VARIABLES:
             data[name] = xr.Variable(
                 ("profile_pv", "x"), profiles[row] * scale, {"units": unit, "long_name": long_name}
             )
-        coords["profile_pv"] = ("profile_pv", prof_pv, {"units": "PV", "long_name": "profile time"})
+        coords["profile_pv"] = ("profile_pv", prof_pv, {"units": "1",
+                                                        "long_name": "profile time, injected pore volumes"})
         coords["x"] = ("x", (np.arange(cells) + 0.5) / cells, {"units": "1", "long_name": "cell-centre x / L"})
     ds = xr.Dataset(data, coords=coords, attrs=dict(attrs))
     for name, err in mass_balance_errors(totals).items():

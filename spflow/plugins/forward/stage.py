@@ -45,14 +45,24 @@ RESPONSE_UNITS = {
     "c_surfactant_out": "ppm",
     "salinity_out": "ppm",
 }
+#: Their long names.
+RESPONSE_NAMES = {
+    "dp": "pressure drop across the core",
+    "oil_cut": "oil cut of the effluent",
+    "recovery": "oil recovered, fraction of the oil in place",
+    "c_polymer_out": "polymer concentration of the effluent",
+    "c_surfactant_out": "surfactant concentration of the effluent",
+    "salinity_out": "salinity of the effluent",
+}
 
 RESPONSES = DatasetSchema(
     dims=("sample", "experiment", "pv"),
     variables={
-        name: Variable(("sample", "experiment", "pv"), units=None, allow_nan=True) for name in RESPONSE_UNITS
+        name: Variable(("sample", "experiment", "pv"), units=unit, allow_nan=True, long_name=RESPONSE_NAMES[name])
+        for name, unit in RESPONSE_UNITS.items()
     }
-    | {"total_pv": Variable(("experiment",), units="PV"),
-       "failure": Variable(("sample",), kind="UO", required=False,
+    | {"total_pv": Variable(("experiment",), units="1", long_name="pore volumes injected in the coreflood"),
+       "failure": Variable(("sample",), kind="UO", required=False, long_name="why the sample's run failed",
                            doc="why a sample's run failed (its rows are NaN); empty for a sample that ran")},
     doc="simulated coreflood responses",
 )
@@ -72,7 +82,7 @@ def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step, max_st
 
 class Forward(Stage):
     name = "forward"
-    version = "2"
+    version = "3"
     description = "SP coreflood simulator over a design and a set of experiments"
     inputs = {"design": DESIGN}
     optional_inputs = frozenset({"design"})
@@ -138,9 +148,10 @@ class Forward(Stage):
         out = xr.Dataset(
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
-            | {"total_pv": ("experiment", total, {"units": "PV"}), "failure": ("sample", failure.astype(str))},
-            coords={"sample": np.arange(len(rows)), "experiment": [e.name for e in experiments], "pv": grid},
+            | {"total_pv": ("experiment", total, {"units": "1"}), "failure": ("sample", failure.astype(str))},
+            coords={"sample": ("sample", np.arange(len(rows)), {"units": "1", "long_name": "sample number"}),
+                    "experiment": ("experiment", [e.name for e in experiments], {"long_name": "coreflood"}),
+                    "pv": ("pv", grid, {"units": "1", "long_name": "injected pore volumes"})},
             attrs={"cells": self.params["cells"], "scheme": self.params["scheme"]},
         )
-        out["pv"].attrs["units"] = "PV"
-        return out
+        return RESPONSES.annotate(out)

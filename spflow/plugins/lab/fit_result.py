@@ -39,14 +39,19 @@ __all__ = ["FitError", "FIT", "fit_least_squares", "fit_interval", "profile_inte
 FIT = DatasetSchema(
     dims=("param",),
     variables={
-        "estimate": Variable(("param",), doc="least-squares estimate (units: attrs units_<name> / variable unit)"),
-        "std": Variable(("param",), doc="standard error, sqrt of the covariance diagonal"),
-        "covariance": Variable(("param", "param_"), doc="Gauss-Newton covariance s^2 (J^T J)^-1"),
-        "unit": Variable(("param",), kind="U", doc="unit of each parameter"),
+        "estimate": Variable(("param",), long_name="least-squares estimate",
+                             doc="least-squares estimate (units: attrs units_<name> / variable unit)"),
+        "std": Variable(("param",), long_name="standard error of the estimate",
+                        doc="standard error, sqrt of the covariance diagonal"),
+        "covariance": Variable(("param", "param_"), long_name="covariance of the estimates",
+                               doc="Gauss-Newton covariance s^2 (J^T J)^-1"),
+        "unit": Variable(("param",), kind="U", long_name="unit of each parameter", doc="unit of each parameter"),
         "profile_lower": Variable(("param",), required=False, allow_nan=True,
+                                  long_name="lower end of the profile-likelihood interval",
                                   doc="lower end of the profile-likelihood interval (attrs interval_level; -inf = "
                                       "not bounded by the data)"),
         "profile_upper": Variable(("param",), required=False, allow_nan=True,
+                                  long_name="upper end of the profile-likelihood interval",
                                   doc="upper end of the profile-likelihood interval (+inf = not bounded by the data)"),
     },
     attrs=("n_points", "dof", "rss", "reduced_chi2", "method", "kind", "experiment"),

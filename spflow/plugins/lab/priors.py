@@ -20,6 +20,7 @@ import difflib
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE, udunits
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
@@ -69,6 +70,7 @@ def prior_box(name: str, estimate: float, std: float, *, mode: str, relative: fl
 
 class Priors(Stage):
     name = "priors"
+    version = "2"
     description = "uniform priors around lab-fit estimates (±20 % rule of Algorithm 1, or k fit standard errors)"
     inputs = {port: FIT for port in FIT_PORTS}
     optional_inputs = frozenset(FIT_PORTS)
@@ -147,14 +149,14 @@ class Priors(Stage):
         _check_feasible(dict(zip(names, lower)), dict(zip(names, upper)))
         return xr.Dataset(
             {
-                "lower": ("param", lower, {"units": "per-parameter (see unit)"}),
-                "upper": ("param", upper, {"units": "per-parameter (see unit)"}),
-                "default": ("param", centre, {"units": "per-parameter (see unit)",
+                "lower": ("param", lower, {UNITS_VARIABLE: "unit"}),
+                "upper": ("param", upper, {UNITS_VARIABLE: "unit"}),
+                "default": ("param", centre, {UNITS_VARIABLE: "unit",
                                               "long_name": "lab estimate (forward default for explicit ranges)"}),
-                "unit": ("param", np.array([_BY_NAME[n].unit for n in names])),
+                "unit": ("param", np.array([udunits(_BY_NAME[n].unit) for n in names])),
                 "source": ("param", np.array(source)),
             },
-            coords={"param": names},
+            coords={"param": ("param", names, {"long_name": "forward-model parameter"})},
             attrs={"distribution": "independent uniform", "mode": p["mode"],
                    "half_width": f"{p['relative']:g} * |estimate|" if p["mode"] == "relative"
                    else f"{p['k']:g} * std"},

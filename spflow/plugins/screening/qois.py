@@ -78,6 +78,6 @@ def qoi_coords(index: OutputIndex) -> dict[str, tuple]:
         "qoi": ("qoi", np.array(labels)),
         "qoi_variable": ("qoi", index.variable.astype(str)),
         "qoi_experiment": ("qoi", index.experiment.astype(str)),
-        "qoi_pv": ("qoi", index.pv.astype(float), {"units": "PV"}),
+        "qoi_pv": ("qoi", index.pv.astype(float), {"units": "1", "long_name": "injected pore volumes of the QoI"}),
         "qoi_units": ("qoi", np.array([index.units[str(v)] for v in index.variable])),
     }

@@ -11,20 +11,28 @@ from spflow.core.schema import DatasetSchema, Variable
 __all__ = ["SCREENING", "SOBOL_SCREENING", "MORRIS_SCREENING"]
 
 _QP = ("qoi", "param")
+_SOBOL = {"S1": "first-order Sobol' index", "S1_conf": "bootstrap half-width of the first-order index",
+          "ST": "total Sobol' index", "ST_conf": "bootstrap half-width of the total index",
+          "S2": "second-order Sobol' index", "S2_conf": "bootstrap half-width of the second-order index"}
+_MORRIS = {"mu": "mean elementary effect", "mu_star": "mean absolute elementary effect",
+           "mu_star_conf": "bootstrap half-width of mu_star", "sigma": "standard deviation of the elementary effects"}
 
 _COMMON = {
-    "lower": Variable(("param",), units=None),
-    "upper": Variable(("param",), units=None),
-    "default": Variable(("param",), units=None),
-    "unit": Variable(("param",), kind="U"),
-    "group": Variable(("param",), kind="U", doc="sub-model the parameter was screened with"),
-    "score": Variable(("param",), units="1", doc="selection score"),
-    "selected": Variable(("param",), kind="b", doc="kept by the selection rule"),
-    "variance": Variable(_QP, units="", doc="QoI variance over the parameter's screening design"),
-    "qoi_variable": Variable(("qoi",), kind="U"),
-    "qoi_experiment": Variable(("qoi",), kind="U"),
-    "qoi_pv": Variable(("qoi",), units="PV", allow_nan=True),
-    "qoi_units": Variable(("qoi",), kind="U"),
+    "lower": Variable(("param",), units=None, long_name="lower end of the screened range"),
+    "upper": Variable(("param",), units=None, long_name="upper end of the screened range"),
+    "default": Variable(("param",), units=None, long_name="default value of the parameter"),
+    "unit": Variable(("param",), kind="U", long_name="unit of each parameter"),
+    "group": Variable(("param",), kind="U", doc="sub-model the parameter was screened with",
+                      long_name="sub-model the parameter was screened with"),
+    "score": Variable(("param",), units="1", doc="selection score", long_name="selection score"),
+    "selected": Variable(("param",), kind="b", doc="kept by the selection rule",
+                         long_name="kept by the selection rule"),
+    "variance": Variable(_QP, units="", doc="QoI variance over the parameter's screening design",
+                         long_name="QoI variance over the parameter's screening design"),
+    "qoi_variable": Variable(("qoi",), kind="U", long_name="variable of the QoI"),
+    "qoi_experiment": Variable(("qoi",), kind="U", long_name="coreflood of the QoI"),
+    "qoi_pv": Variable(("qoi",), units="1", allow_nan=True, long_name="injected pore volumes of the QoI"),
+    "qoi_units": Variable(("qoi",), kind="U", long_name="unit of the QoI"),
 }
 
 #: Any screening result (what ``selected_space`` and the figure need).
@@ -34,8 +42,9 @@ SCREENING = DatasetSchema(dims=_QP, variables=_COMMON, attrs=("method",), doc="s
 SOBOL_SCREENING = DatasetSchema(
     dims=_QP,
     variables=_COMMON
-    | {k: Variable(_QP, units="1") for k in ("S1", "S1_conf", "ST", "ST_conf")}
-    | {k: Variable(("qoi", "param", "param_j"), units="1", required=False, allow_nan=True) for k in ("S2", "S2_conf")},
+    | {k: Variable(_QP, units="1", long_name=_SOBOL[k]) for k in ("S1", "S1_conf", "ST", "ST_conf")}
+    | {k: Variable(("qoi", "param", "param_j"), units="1", required=False, allow_nan=True, long_name=_SOBOL[k])
+       for k in ("S2", "S2_conf")},
     attrs=("method",),
     doc="Sobol' indices per QoI and parameter, selection and screened space",
 )
@@ -43,7 +52,8 @@ SOBOL_SCREENING = DatasetSchema(
 #: Morris screening: elementary-effect statistics in QoI units.
 MORRIS_SCREENING = DatasetSchema(
     dims=_QP,
-    variables=_COMMON | {k: Variable(_QP, units="") for k in ("mu", "mu_star", "mu_star_conf", "sigma")},
+    variables=_COMMON | {k: Variable(_QP, units="", long_name=_MORRIS[k])
+                         for k in ("mu", "mu_star", "mu_star_conf", "sigma")},
     attrs=("method",),
     doc="Morris mu, mu*, sigma per QoI and parameter, selection and screened space",
 )

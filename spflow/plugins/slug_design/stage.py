@@ -47,12 +47,12 @@ __all__ = ["SlugDesign", "SLUG_DESIGN"]
 SLUG_DESIGN = DatasetSchema(
     dims=("evaluation", "design_var", "objective"),
     variables={
-        "design": Variable(("evaluation", "design_var")),
-        "observed": Variable(("evaluation", "objective")),
-        "projected": Variable(("evaluation", "objective")),
-        "on_front": Variable(("evaluation",), kind="b"),
-        "knee_design": Variable(("design_var",), units="PV"),
-        "knee_projected": Variable(("objective",)),
+        "design": Variable(("evaluation", "design_var"), long_name="slug sizes of each evaluated design"),
+        "observed": Variable(("evaluation", "objective"), long_name="objective values of each evaluation"),
+        "projected": Variable(("evaluation", "objective"), long_name="objectives projected under the drift"),
+        "on_front": Variable(("evaluation",), kind="b", long_name="on the projected Pareto front"),
+        "knee_design": Variable(("design_var",), units="1", long_name="slug sizes of the knee design (pore volumes)"),
+        "knee_projected": Variable(("objective",), long_name="projected objectives of the knee design"),
     },
     attrs=("drift", "steps_per_year", "total_pv"),
     doc="EEIHV slug-size design: evaluations, projected Pareto front, front uncertainty and knee design (§4.7)",
@@ -76,7 +76,7 @@ def _snapshot_recorder(wanted: set[int], store: dict[int, BGOResult], ctx: Stage
 
 class SlugDesign(Stage):
     name = "slug_design"
-    version = "2"
+    version = "3"
     description = "slug-size design under price and parameter uncertainty: EEIHV on -NPV and max dp (thesis §4.7)"
     inputs = {"posterior": POSTERIOR}
     optional_inputs = frozenset({"posterior"})
@@ -171,12 +171,12 @@ class SlugDesign(Stage):
         result = run_bgo(objective, design_bounds(), n_init=p["n_init"], max_iter=p["max_iter"], rtol=p["rtol"],
                          min_iter=p["min_iter"], batch=p["batch"], seed=p["seed"], reference=reference,
                          callback=_snapshot_recorder(set(p["snapshots"]), snapshots, ctx, p["max_iter"]))
-        out = result.to_dataset(design_names=DESIGN_VARIABLES, design_units=("PV",) * 3,
+        out = result.to_dataset(design_names=DESIGN_VARIABLES, design_units=("1",) * 3,
                                 objective_names=OBJECTIVES, objective_units=OBJECTIVE_UNITS)
         out["posterior_draw"] = ("evaluation", np.array([e["draw"] for e in objective.log]),
                                  {"units": "1", "description": "flat posterior draw index (-1: default parameters)"})
         out["tertiary_oil"] = ("evaluation", np.array([e["oil_pv"] for e in objective.log]),
-                               {"units": "PV", "description": "oil produced after the IWF, core pore volumes"})
+                               {"units": "1", "description": "oil produced after the IWF, core pore volumes"})
         out = out.merge(self._snapshots(snapshots, result.X.shape[0]))
         knee = self._knee(out)
         out = out.merge(knee).merge(self._knee_runs(ctx, draws, knee["knee_design"].values, parallel))
@@ -229,7 +229,7 @@ class SlugDesign(Stage):
         row = int(front[knee_point(values)])
         return xr.Dataset({
             "knee_index": ((), row, {"units": "1", "description": "evaluation of the knee design (TMDSM)"}),
-            "knee_design": ("design_var", out["design"].values[row], {"units": "PV"}),
+            "knee_design": ("design_var", out["design"].values[row], {"units": "1"}),
             "knee_projected": ("objective", out["projected"].values[row],
                                {"units": "per objective (see objective_units)"}),
         })
@@ -251,7 +251,7 @@ class SlugDesign(Stage):
             "knee_npv": ("knee_draw", -values[:, 0], {"units": "M$"}),
             "knee_max_dp": ("knee_draw", values[:, 1], {"units": "kPa"}),
             "knee_posterior_draw": ("knee_draw", np.array([i for i, _, _ in xi]), {"units": "1"}),
-        }, coords={"pv": ("pv", pv, {"units": "PV"}), "knee_draw": np.arange(n)})
+        }, coords={"pv": ("pv", pv, {"units": "1", "long_name": "injected pore volumes"}), "knee_draw": np.arange(n)})
 
     def _price_paths(self, price: OilPriceModel, years: int) -> xr.Dataset:
         """Sample paths of Eq. 4.12 (Fig. 4.6), kept at no more than about ``_PRICE_TIMES`` times per path."""

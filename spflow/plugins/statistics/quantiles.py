@@ -33,6 +33,9 @@ class Quantiles(Stage):
             out[f"{v}_mean"] = mean[v]
             out[v].attrs = dict(ensemble[v].attrs)
             out[f"{v}_mean"].attrs = dict(ensemble[v].attrs)
+            if "long_name" in ensemble[v].attrs:
+                out[f"{v}_mean"].attrs["long_name"] = f"ensemble mean of {ensemble[v].attrs['long_name']}"
+        out["quantile"].attrs.update(units="1", long_name="quantile level")
         for v in ensemble.data_vars:
             if v not in per_sample:
                 out[v] = ensemble[v]

@@ -26,7 +26,7 @@ from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 
-from .contract import SURROGATE
+from .contract import SURROGATE, with_parameter_units
 from .pce_model import PCE
 from .pce_stage import PCE_PARAMS, check_lists, fit_options
 from .training_data import training_set
@@ -38,7 +38,7 @@ _FORWARD_PARAMS = ("experiments", "fixed", "effects", "cells", "pv_step", "schem
 
 class AdaptivePCE(Stage):
     name = "adaptive_pce"
-    version = "2"  # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance
+    version = "3"  # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance; 3: + UDUNITS units per element
     description = "PCE proxy on a growing LHS design until the mean LOO error settles (Algorithm 2)"
     inputs = {"space": SPACE}
     output = SURROGATE
@@ -99,7 +99,7 @@ class AdaptivePCE(Stage):
                 break
             size, iteration = min(p["n_increment"], p["n_max"] - n), iteration + 1
         n_s, loo, modified, emp, degree = (np.array(c) for c in zip(*rows))
-        ds = model.to_dataset()
+        ds = with_parameter_units(model.to_dataset(), space)
         ds = ds.assign_coords(n_s=("n_s", n_s, {"units": "1", "long_name": "training design size"}))
         ds["loo_history"] = ("n_s", loo, {"units": "1", "long_name": "mean LOO error over outputs (Eq. 3.9)"})
         ds["modified_loo_history"] = ("n_s", modified, {"units": "1", "long_name": "mean modified LOO error"})

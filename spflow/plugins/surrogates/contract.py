@@ -17,21 +17,26 @@ import numpy as np
 import xarray as xr
 
 from spflow.core.errors import ParameterError
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.plugins import get_registry
 from spflow.core.schema import DatasetSchema, Variable
 
 from .outputs import OutputIndex
 
-__all__ = ["Surrogate", "SURROGATE", "load_surrogate", "surrogate_kinds"]
+__all__ = ["Surrogate", "SURROGATE", "load_surrogate", "surrogate_kinds", "with_parameter_units"]
+
+#: Variables of a stored surrogate that hold parameter values (units per parameter).
+PARAMETER_VALUED = ("lower", "upper", "train_x")
 
 #: Schema of every stored surrogate.
 SURROGATE = DatasetSchema(
     dims=("param", "output"),
     variables={
-        "lower": Variable(("param",), units=None),
-        "upper": Variable(("param",), units=None),
-        "output_variable": Variable(("output",), kind="U"),
-        "output_pv": Variable(("output",), units="PV", allow_nan=True),
+        "lower": Variable(("param",), units=None, long_name="lower end of the training box"),
+        "upper": Variable(("param",), units=None, long_name="upper end of the training box"),
+        "output_variable": Variable(("output",), kind="U", long_name="variable of each output column"),
+        "output_pv": Variable(("output",), units="1", allow_nan=True,
+                              long_name="injected pore volumes of each output column"),
     },
     attrs=("surrogate",),
     doc="a fitted surrogate (see attrs['surrogate'] for its kind)",
@@ -76,8 +81,12 @@ class Surrogate(ABC):
         """Predictions as a Dataset with dims (``sample``, ``output``) and the output labels as coordinates."""
         x = self.check_points(x)
         mean, var = self._predict(x)
-        ds = xr.Dataset({"mean": (("sample", "output"), mean), "variance": (("sample", "output"), var)},
-                        coords={"sample": np.arange(x.shape[0]), **self.outputs.coords()})
+        ds = xr.Dataset({"mean": (("sample", "output"), mean, {UNITS_VARIABLE: "output_unit",
+                                                               "long_name": "surrogate mean"}),
+                         "variance": (("sample", "output"), var, {UNITS_VARIABLE: "output_unit_squared",
+                                                                  "long_name": "surrogate error variance"})},
+                        coords={"sample": ("sample", np.arange(x.shape[0]), {"units": "1", "long_name": "point"}),
+                                **self.outputs.coords()})
         ds.attrs = self.outputs.unit_attrs()
         return ds
 
@@ -93,9 +102,10 @@ class Surrogate(ABC):
 
     def _dataset(self, variables: dict, coords: dict | None = None, attrs: dict | None = None) -> xr.Dataset:
         ds = xr.Dataset(
-            {"lower": ("param", self.lower, {"units": "per-parameter"}),
-             "upper": ("param", self.upper, {"units": "per-parameter"}), **variables},
-            coords={"param": self.names, **self.outputs.coords(), **(coords or {})},
+            {"lower": ("param", self.lower, {"long_name": "lower end of the training box"}),
+             "upper": ("param", self.upper, {"long_name": "upper end of the training box"}), **variables},
+            coords={"param": ("param", self.names, {"long_name": "input parameter (design column)"}),
+                    **self.outputs.coords(), **(coords or {})},
         )
         ds.attrs = {"surrogate": self.kind, **self.outputs.unit_attrs(), **(attrs or {})}
         return ds
@@ -105,6 +115,19 @@ class Surrogate(ABC):
         """Constructor arguments shared by every kind, read back from a stored Dataset."""
         return {"names": [str(n) for n in ds["param"].values], "lower": ds["lower"].values,
                 "upper": ds["upper"].values, "outputs": OutputIndex.from_dataset(ds)}
+
+
+def with_parameter_units(ds: xr.Dataset, space: xr.Dataset) -> xr.Dataset:
+    """A stored surrogate ``ds`` with the units of its inputs: the ``space``'s ``unit`` of each parameter as
+    ``param_unit``, and every variable along ``param`` that holds parameter values (the box, Kriging's training
+    points) in units per element (:mod:`spflow.core.cf_metadata`). A surrogate stage calls it on what it returns."""
+    names = [str(n) for n in ds["param"].values]
+    ds = ds.assign(param_unit=("param", space["unit"].sel(param=names).values.astype(str),
+                               {"long_name": "UDUNITS unit of each input parameter"}))
+    for name in PARAMETER_VALUED:
+        if name in ds:
+            ds[name].attrs[UNITS_VARIABLE] = "param_unit"
+    return ds
 
 
 def surrogate_kinds() -> list[str]:

@@ -63,7 +63,8 @@ def _validation(model: Surrogate, design: xr.Dataset, responses: xr.Dataset, var
 
 def _series(name: str, values: np.ndarray, pv: np.ndarray, unit: str, dims: tuple[str, ...], **coords) -> xr.Dataset:
     """One (…, pv) array as a Dataset, so variables on different PV grids merge by outer join."""
-    return xr.Dataset({name: (dims, values, {"units": unit})}, coords={"pv": ("pv", pv, {"units": "PV"}), **coords})
+    pv_coord = ("pv", pv, {"units": "1", "long_name": "injected pore volumes"})
+    return xr.Dataset({name: (dims, values, {"units": unit})}, coords={"pv": pv_coord, **coords})
 
 
 def scatter_data(surrogate: xr.Dataset, design: xr.Dataset, responses: xr.Dataset, *,

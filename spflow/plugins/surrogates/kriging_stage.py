@@ -15,7 +15,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN, SPACE
 from spflow.plugins.forward.stage import RESPONSES
 
-from .contract import SURROGATE
+from .contract import SURROGATE, with_parameter_units
 from .gp_model import GP
 from .kriging import KERNELS
 from .kriging_surrogate import SHARING
@@ -55,12 +55,12 @@ class _KrigingStage(Stage):
         options = {k: self.params[k] for k in ("kernel", "share", "restarts", "seed", "nugget")}
         options["parallel"] = ctx.parallel() if ctx.n_jobs > 1 else None
         options["progress"] = lambda groups: ctx.progress(groups, what="length-scale fits")
-        return self._fit(data, options).to_dataset()
+        return with_parameter_units(self._fit(data, options).to_dataset(), space)
 
 
 class PCKStage(_KrigingStage):
     name = "pck"
-    version = "2"  # 2: the trend's hybrid LARS ranks by the LASSO-modified path (issue #24)
+    version = "3"  # 2: the trend's hybrid LARS ranks by the LASSO-modified path (issue #24); 3: + UDUNITS units per element
     description = "PC-Kriging proxy (universal Kriging on a hybrid-LARS Legendre trend, ML length scales)"
     params = {
         **KRIGING_PARAMS,
@@ -77,7 +77,7 @@ class PCKStage(_KrigingStage):
 
 class GPStage(_KrigingStage):
     name = "gp"
-    version = "1"
+    version = "2"
     description = "plain Gaussian-process proxy (ordinary Kriging, ML length scales)"
     params = KRIGING_PARAMS
 

@@ -29,6 +29,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError, SchemaError
 
 from .blas import single_threaded_blas
@@ -212,23 +213,27 @@ class KrigingSurrogate(Surrogate):
     # -- storage ----------------------------------------------------------------------------------------------------
     def to_dataset(self) -> xr.Dataset:
         return self._dataset(
-            {"train_x": (("train", "param"), self.x, {"units": "per-parameter (physical)"}),
-             "train_y": (("train", "output"), self.y, {"units": "output units (units_<variable>)"}),
-             "multi_index": (("term", "param"), self.indices, {"units": "1"}),
+            {"train_x": (("train", "param"), self.x, {"long_name": "training points"}),
+             "train_y": (("train", "output"), self.y, {UNITS_VARIABLE: "output_unit",
+                                                       "long_name": "training responses"}),
+             "multi_index": (("term", "param"), self.indices, {"units": "1", "long_name": "polynomial degree of each "
+                                                                                         "parameter in the term"}),
              "trend": (("output", "term"), self.trend.astype(np.int8),
                        {"units": "1", "long_name": "1 if the term is in the output's Kriging trend"}),
              "coefficients": (("output", "term"), self.coefficients,
-                              {"units": "output units (units_<variable>)", "long_name": "GLS trend coefficients"}),
+                              {UNITS_VARIABLE: "output_unit", "long_name": "GLS trend coefficients"}),
              "process_variance": ("output", self.process_variance,
-                                  {"units": "output units squared", "long_name": "Kriging process variance σ²"}),
+                                  {UNITS_VARIABLE: "output_unit_squared", "long_name": "Kriging process variance σ²"}),
              "output_group": ("output", self.group, {"units": "1", "long_name": "length-scale group of the output"}),
              "lengthscale": (("group", "param"), self.lengthscale,
-                             {"units": "1 (auxiliary space [-1, 1])",
-                              "long_name": "correlation length ℓ; Eq. 3.20's θ = sqrt(2) ℓ for the gaussian kernel"}),
+                             {"units": "1", "long_name": "correlation length ℓ in the auxiliary space [-1, 1]; "
+                                                        "Eq. 3.20's θ = sqrt(2) ℓ for the gaussian kernel"}),
              "nugget": ("group", self.nugget, {"units": "1", "long_name": "added to the correlation diagonal"}),
              "loo": ("output", self.loo, {"units": "1", "long_name": "Kriging LOO error ε_LOO (Eq. 3.8, Dubrule)"})},
-            coords={"term": np.arange(self.indices.shape[0]), "train": np.arange(self.x.shape[0]),
-                    "group": np.arange(self.lengthscale.shape[0])},
+            coords={"term": ("term", np.arange(self.indices.shape[0]), {"units": "1", "long_name": "trend term"}),
+                    "train": ("train", np.arange(self.x.shape[0]), {"units": "1", "long_name": "training point"}),
+                    "group": ("group", np.arange(self.lengthscale.shape[0]),
+                              {"units": "1", "long_name": "length-scale group"})},
             attrs={"kernel": self.kernel, "loo_mean": float(np.mean(self.loo)), **self.info},
         )
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import udunits
 from spflow.core.errors import ParameterError
 
 __all__ = ["OutputIndex", "stack_outputs"]
@@ -46,10 +47,18 @@ class OutputIndex:
         return cols[np.argsort(self.pv[cols], kind="stable")]
 
     def coords(self) -> dict[str, tuple]:
-        """Coordinates on an ``output`` dim, for storing the index in a Dataset."""
-        return {"output_variable": ("output", self.variable.astype(str)),
-                "output_experiment": ("output", self.experiment.astype(str)),
-                "output_pv": ("output", self.pv.astype(float), {"units": "PV"})}
+        """Coordinates on an ``output`` dim, for storing the index in a Dataset; ``output_unit`` and
+        ``output_unit_squared`` (UDUNITS) are what values and variances per output column are in (units per element,
+        :mod:`spflow.core.cf_metadata`)."""
+        unit = [udunits(self.units.get(str(v), "1")) for v in self.variable]
+        return {"output_variable": ("output", self.variable.astype(str), {"long_name": "variable of the output"}),
+                "output_experiment": ("output", self.experiment.astype(str),
+                                      {"long_name": "coreflood of the output (empty: none)"}),
+                "output_pv": ("output", self.pv.astype(float), {"units": "1", "long_name": "injected pore volumes "
+                                                                                          "of the output (NaN: none)"}),
+                "output_unit": ("output", np.array(unit, dtype=str), {"long_name": "UDUNITS unit of the output"}),
+                "output_unit_squared": ("output", np.array(["1" if u == "1" else f"({u})^2" for u in unit], dtype=str),
+                                        {"long_name": "UDUNITS unit of the output's square"})}
 
     @classmethod
     def from_dataset(cls, ds: xr.Dataset) -> OutputIndex:

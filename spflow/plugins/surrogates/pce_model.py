@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
+
 from spflow.core.errors import ParameterError
 
 from . import sobol_from_pce as sobol
@@ -124,15 +126,19 @@ class PCE(Surrogate):
 
     # -- storage ------------------------------------------------------------------------------------------------
     def to_dataset(self) -> xr.Dataset:
-        errors = {name: ("output", getattr(self, name), {"units": "1"})
-                  for name in ("loo", "modified_loo", "empirical")}
+        what = {"loo": "relative leave-one-out error (Eq. 3.8)", "modified_loo": "corrected leave-one-out error",
+                "empirical": "relative empirical error (Eq. 3.10)"}
+        errors = {name: ("output", getattr(self, name), {"units": "1", "long_name": what[name]}) for name in what}
         ds = self._dataset(
-            {"coefficients": (("output", "term"), self.coefficients, {"units": "output units (units_<variable>)"}),
-             "multi_index": (("term", "param"), self.indices, {"units": "1"}),
+            {"coefficients": (("output", "term"), self.coefficients,
+                              {UNITS_VARIABLE: "output_unit", "long_name": "PCE coefficients (Legendre basis)"}),
+             "multi_index": (("term", "param"), self.indices, {"units": "1", "long_name": "polynomial degree of "
+                                                                                         "each parameter in the term"}),
              "output_variance": ("output", self.output_variance,
-                                 {"units": "output units squared", "long_name": "population variance of training y"}),
+                                 {UNITS_VARIABLE: "output_unit_squared",
+                                  "long_name": "population variance of training y"}),
              **errors},
-            coords={"term": np.arange(self.indices.shape[0])},
+            coords={"term": ("term", np.arange(self.indices.shape[0]), {"units": "1", "long_name": "basis term"})},
             attrs={**self.info, "loo_mean": float(np.mean(self.loo)),
                    "modified_loo_mean": float(np.mean(self.modified_loo)),
                    "empirical_mean": float(np.mean(self.empirical))},

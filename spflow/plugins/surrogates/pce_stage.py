@@ -17,7 +17,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN, SPACE
 from spflow.plugins.forward.stage import RESPONSE_UNITS, RESPONSES
 
-from .contract import SURROGATE
+from .contract import SURROGATE, with_parameter_units
 from .degree_adaptive import DEGREE_MAX, MAX_TERMS_RATIO, SOLVERS
 from .pce_model import PCE
 from .training_data import training_set
@@ -60,7 +60,7 @@ def check_lists(stage: str, params) -> None:
 
 class PCEStage(Stage):
     name = "pce"
-    version = "2"  # 2: degree cap 15 + basis-size limit, corrected LOO as the error variance, degree_cap attrs
+    version = "3"  # 2: degree cap 15 + basis-size limit, corrected LOO as the error variance, degree_cap attrs; 3: + UDUNITS units per element
     description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
     output = SURROGATE
@@ -74,4 +74,4 @@ class PCEStage(Stage):
         data = training_set(space, design, responses, list(self.params["variables"]), list(self.params["experiments"]))
         model = PCE.fit(data.names, data.lower, data.upper, data.outputs, data.x, data.y,
                         **fit_options(self.params, ctx))
-        return model.to_dataset()
+        return with_parameter_units(model.to_dataset(), space)
