@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import spflow.cli
-import spflow.plugins.forward.simulate as simulate_module
+import spflow.plugins.forward.kernel as kernel_module  # simulate() imports run_kernel from it when a run starts
 from spflow.io.format import build_coreflood
 from spflow.study import StudyError, load_study
 from study_project import ROWS, STUDY, data_text, write_project
@@ -207,7 +207,7 @@ def test_there_are_at_least_40_cases():
 def no_simulation(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("a simulation started while validating a study")
-    monkeypatch.setattr(simulate_module, "run_kernel", forbidden)
+    monkeypatch.setattr(kernel_module, "run_kernel", forbidden)
 
 
 @pytest.mark.parametrize("case", list(CASES))
