@@ -87,7 +87,7 @@ class Options:
     numerical_variants: tuple[Numerics, ...] = DEFAULT_VARIANTS
     numerical_window: int = 3
     #: cap of the estimated scale of the numerical-error term (:mod:`~spflow.plugins.gap.numerical_scale`)
-    numerical_scale_max: float = 2.0
+    numerical_scale_max: float = 1.0
     discrepancy_degree: int = 2
     subset_pool: int = 4
     #: exact cost reductions on (same results, fewer forward runs and less CPU; ``False``: the behaviour before,

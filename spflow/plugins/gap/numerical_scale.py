@@ -24,9 +24,12 @@ the estimate see the residuals the recalibration under ``Sigma_s`` would leave, 
 ``Sigma_0``. The interval is the profile-likelihood set ``{s : 2 (l(s_hat) - l(s)) <= chi^2_1(level)}`` cut to
 ``[0, s_max]``. At the boundary ``s = 0`` the likelihood-ratio statistic is a 50:50 mixture of ``chi^2_0`` and
 ``chi^2_1`` (Self & Liang 1987), so the interval is conservative there (its level is ``(1 + level) / 2`` one-sided).
-``s_max`` (default 2) caps a scale that would otherwise absorb a physical gap located where the numerics are
-sensitive: more than twice the largest spread of two grid/scheme variants is not a numerical error of the
-base model's grid.
+The estimate is made under the base hypothesis, so a physical gap located where the numerics are sensitive (a
+moved polymer or oil front) raises it too. ``s_max`` (the diagnosis's default 1: the spread itself, which is
+already the largest difference of two grid/scheme variants) caps that: the data may show less numerical error
+than the worst case of the variants, never more -- a larger smearing than those variants produce is not the base
+model's numerical error on its grid (docs/gap.md, Validation, where on twins only physical gaps pushed the
+estimate above 1 and data from other numerics gave 0.4-0.5).
 """
 
 from __future__ import annotations
@@ -87,7 +90,7 @@ def scale_log_likelihood(layout: Layout, spread: Mapping[tuple[str, str], np.nda
 
 
 def estimate_scale(layout: Layout, spread: Mapping[tuple[str, str], np.ndarray], residual: np.ndarray,
-                   jacobian: np.ndarray, tau: float, maximum: float = 2.0, level: float = 0.95,
+                   jacobian: np.ndarray, tau: float, maximum: float = 1.0, level: float = 0.95,
                    points: int = 41) -> NumericalScale:
     """Maximum-likelihood scale of the numerical-error term on ``[0, maximum]`` (module docstring): the best of a
     ``points`` grid refined by a bounded scalar search, and its profile-likelihood interval at ``level``."""

@@ -65,7 +65,7 @@ OPTION_PARAMS = {
                          doc="shortlisted effects whose subsets (up to max_effects) are refitted jointly"),
     "numerical_error": Param(bool, True, doc="add the base model's own numerical error (2x cells; 2x cells "
                                              "upwind) to the error model"),
-    "numerical_scale_max": Param(float, 2.0, bounds=(0.0, 10.0),
+    "numerical_scale_max": Param(float, 1.0, bounds=(0.0, 10.0),
                                  doc="cap of the numerical-error scale, which is estimated from the base model's "
                                      "calibration residuals (0: the term is off)"),
     "discrepancy_degree": Param(int, 2, bounds=(0, 6),
