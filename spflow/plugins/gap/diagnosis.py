@@ -462,5 +462,5 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         pvalue, pvalue < options.alpha, steps, accepted, decided, ambiguity, reference,
                         _label(reference), w_base, w_ref, base_view, final_view,
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
-                        time.perf_counter() - start, runs, chi2_measurement, numerical, scale, disc, w_disc, search, pool,
-                        search_runs, tried, notes, ledger.table())
+                        time.perf_counter() - start, runs, chi2_measurement, numerical, scale, disc, w_disc, search,
+                        pool, search_runs, tried, notes, ledger.table())

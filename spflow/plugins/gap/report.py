@@ -23,9 +23,9 @@ Dataset layout (every variable has ``units``; mixed-unit tables name their units
   ``effects`` holds the *declared* effects only (verdict ``effect`` / ``ambiguous``), ``tried_not_declared`` every
   other refitted candidate with its single-effect strength; ``numerical_error`` (variants, forward runs, chi^2
   with measurement error only, the estimated scale with its interval and likelihood profile, RMS spread of the
-  variants per block, unscaled) and the scale alone as the number ``numerical_scale``, ``discrepancy`` (the competitor's terms, calibration chi^2,
-  held-out dELPD over the base), ``search`` (pool, subsets fitted, admissible, chosen, forward runs) and
-  ``notes`` (blocks left out of the report) as JSON.
+  variants per block, unscaled) and the scale alone as the number ``numerical_scale``, ``discrepancy`` (the
+  competitor's terms, calibration chi^2, held-out dELPD over the base), ``search`` (pool, subsets fitted,
+  admissible, chosen, forward runs) and ``notes`` (blocks left out of the report) as JSON.
 
 :func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
 """
