@@ -109,6 +109,10 @@ def main() -> None:
                               "effects": s["effects"], "chi2_base": s["fit"]["chi2_base"], "dof": s["fit"]["dof"],
                               "chi2_base_measurement_only": (s.get("numerical_error") or {}).get(
                                   "chi2_base_measurement_only"),
+                              "numerical_scale": ((s.get("numerical_error") or {}).get("scale") or {}).get(
+                                  "estimate"),
+                              "numerical_scale_interval": [((s.get("numerical_error") or {}).get("scale") or {})
+                                                           .get(k) for k in ("lower", "upper")],
                               "gap_closed": s["gap_closed"], "forward_runs": s["forward_runs"],
                               "wall_time_s": round(time.perf_counter() - start, 1),
                               "tried_not_declared": s.get("tried_not_declared"), "search": s.get("search")}),

@@ -151,14 +151,18 @@ def _truth_params(base: BaseModel, truth: dict) -> dict:
     return {**base.forward_params(base.values(truth["u"])), **truth["fixed"]}
 
 
-def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...]) -> dict:
-    """Generate one twin, diagnose it blind (likelihood ``variables``), and score the diagnosis against the truth."""
+def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], numerical_error: bool = True) -> dict:
+    """Generate one twin, diagnose it blind (likelihood ``variables``; ``numerical_error=False``: without the
+    numerical-error term), and score the diagnosis against the truth."""
     start_cpu, start = time.process_time(), time.perf_counter()
     base, truth, data = twin(spec, cells, seed)
     snr = _snr(base, truth, data[0], variables)
-    g = diagnose([data[0]], [data[1]], base, CATALOGUE, Options(variables=variables))
+    options = Options(variables=variables) if numerical_error else Options(variables=variables,
+                                                                           numerical_variants=())
+    g = diagnose([data[0]], [data[1]], base, CATALOGUE, options)
     return {
         "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
+        "numerical_error": numerical_error,
         "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], "snr": snr,
         **outcome(g, base, truth, variables),
         "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
@@ -185,6 +189,9 @@ def outcome(g, base: BaseModel, truth: dict, variables: tuple[str, ...]) -> dict
         "coverage_heldout": [s["coverage"]["heldout_base"], s["coverage"]["heldout_final"]],
         "parameter_bias": [bias["base"], bias["final"]],
         "chi2_pvalue": s["fit"]["chi2_pvalue"],
+        "numerical_scale": ((s["numerical_error"] or {}).get("scale") or {}).get("estimate"),
+        "numerical_scale_interval": [((s["numerical_error"] or {}).get("scale") or {}).get(k)
+                                     for k in ("lower", "upper")],
         "where": _where(g, variables),
         "step0": _step0(g),
     }
@@ -687,6 +694,20 @@ SETS = {"dp_oil": ("Δp + oil cut", ("dp", "oil_cut")),
         "effluent": ("Δp + oil cut + effluent polymer and surfactant", EFFLUENT)}
 
 
+def select(specs: list[dict], only: list[str] | None) -> list[tuple[dict, int]]:
+    """``(spec, index)`` of the twins of ``specs`` named by ``only`` (a twin id such as
+    ``single:dispersion#3``, a scenario such as ``single:dispersion`` or ``null``; ``None``: all). The index is the
+    twin's position in the whole study, which fixes its seed, so a selected twin is the one the study made."""
+    if only is None:
+        return [(s, i) for i, s in enumerate(specs)]
+    known = {s["id"] for s in specs} | {s["scenario"] for s in specs}
+    unknown = sorted(set(only) - known)
+    if unknown:
+        raise SystemExit(f"--only: no twin or scenario {unknown} in this study's twin counts (ids look like "
+                         f"{specs[0]['id']!r}, scenarios like 'single:dispersion')")
+    return [(s, i) for i, s in enumerate(specs) if s["id"] in only or s["scenario"] in only]
+
+
 def _records(file: Path, cells: int) -> dict[str, dict]:
     """Finished twins of a JSON-lines results file at ``cells`` cells, by id (none if the file does not exist)."""
     if not file.exists():
@@ -739,6 +760,11 @@ def main(argv=None) -> int:
     p.add_argument("--report-only", action="store_true",
                    help="run no twin: rebuild the report from the finished twins in --results (e.g. of a study "
                         "stopped part-way; the report gives the count of each scenario)")
+    p.add_argument("--only", nargs="+", metavar="TWIN",
+                   help="run only these twins (ids such as 'single:dispersion#3' or whole scenarios such as "
+                        "'single:dispersion'; seeds as in the full study of the given counts)")
+    p.add_argument("--no-numerical-error", action="store_true",
+                   help="diagnose without the numerical-error term (Options.numerical_variants = ())")
     p.add_argument("--cells", type=int, default=30)
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--seed", type=int, default=20260101)
@@ -759,13 +785,14 @@ def main(argv=None) -> int:
         specs = scenarios(*counts)
         file = results / f"{key}.jsonl"
         done = _records(file, args.cells)
-        todo = [(s, args.seed + 1000 * i) for i, s in enumerate(specs) if s["id"] not in done]
+        todo = [(s, args.seed + 1000 * i) for s, i in select(specs, args.only) if s["id"] not in done]
         print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
         from joblib import Parallel, delayed
 
         with file.open("a") as fh:
             for record in Parallel(n_jobs=args.jobs, return_as="generator")(
-                    delayed(run_twin)(s, args.cells, seed, variables) for s, seed in todo):
+                    delayed(run_twin)(s, args.cells, seed, variables, not args.no_numerical_error)
+                    for s, seed in todo):
                 fh.write(json.dumps(record) + "\n")
                 fh.flush()
                 print(f"{record['id']:<40} snr {record['snr']:7.1f}  {record['verdict']:<17} "

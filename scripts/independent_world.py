@@ -154,6 +154,7 @@ def run_one(source: str, case: str, seed: int, jobs: int, variant: str = "disper
             "strengths": {e["name"]: e["strength"] for e in result["effects"]},
             "ambiguity_set": result["ambiguity_set"], "chi2_base": result["fit"]["chi2_base"],
             "dof": result["fit"]["dof"], "gap_closed": result["gap_closed"],
+            "numerical_scale": ((result["numerical_error"] or {}).get("scale") or {}).get("estimate"),
             "forward_runs": result["forward_runs"], "diagnosis_s": diag.wall_time_s,
             "wall_s": time.perf_counter() - start}
 

@@ -2,7 +2,8 @@
 upwind transport on a grid four times finer than the base model's (TVD), passed through spflow.synthetic's
 measurement chain, on polymer floods (no surfactant: the effluent surfactant assay is all zero, the regression of
 issue 20's "AR(1) scales must be finite" abort). The null case must not name a physical mechanism; a withheld
-polymer adsorption must be found, with the truth's strength."""
+polymer adsorption must be found, with the truth's strength. The numerical-error scale estimated from the null data
+is above 0 (the data do not share the base model's numerics)."""
 
 import json
 
@@ -70,6 +71,12 @@ def test_upwind_null_names_no_mechanism(tmp_path, capsys):
     assert numerical["variants"] == [f"{2 * CELLS} cells, tvd", f"{2 * CELLS} cells, upwind"]
     assert numerical["forward_runs"] == 2 * 3
     assert result["fit"]["chi2_base"] <= numerical["chi2_base_measurement_only"]
+    # its size was estimated from the calibration residuals: these data come from other numerics, so the scale is
+    # clearly above 0 (twins made with the base's own numerics give about 0, tests/gap/test_numerical_scale.py)
+    scale = numerical["scale"]
+    assert 0.0 < scale["lower"] <= scale["estimate"] <= scale["upper"] <= scale["maximum"] == 1.0
+    assert len(scale["grid"]) == len(scale["profile_nat"]) and max(scale["profile_nat"]) <= 1e-9
+    assert f"numerical error in the error model: {scale['estimate']:.3g} x the spread" in printed
     if result["verdict"] != "none":
         assert "tried, not declared" in printed or not result["tried_not_declared"]
 

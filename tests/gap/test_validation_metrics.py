@@ -89,3 +89,16 @@ def test_indistinguishable_set_against_hand_computed_members():
     assert gv.indistinguishable_set(r) == ["a", "c"]
     r["verdict"] = "out_of_catalogue"
     assert gv.indistinguishable_set(r) == ["a"]  # the diagnosis's own set is kept without a declared effect
+
+
+def test_selected_twins_keep_their_place_and_seed_in_the_study():
+    specs = gv.scenarios(60, 30, 30, 30)
+    groups = 1 + len(gv.CATALOGUE) + 2          # null, one per effect, pairs, out of catalogue: interleaved
+    chosen = gv.select(specs, ["single:dispersion#3", "null#0"])
+    assert [(s["id"], i) for s, i in chosen] == [("null#0", 0), ("single:dispersion#3",
+                                                                  3 * groups + 1 + gv.CATALOGUE.index("dispersion"))]
+    whole = gv.select(specs, ["single:dispersion"])
+    assert len(whole) == 30 and all(s["scenario"] == "single:dispersion" for s, _ in whole)
+    assert gv.select(specs, None) == [(s, i) for i, s in enumerate(specs)]
+    with pytest.raises(SystemExit, match="single:gravity#1"):
+        gv.select(specs, ["single:gravity#1"])

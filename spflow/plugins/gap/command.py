@@ -133,6 +133,12 @@ def main(args: argparse.Namespace) -> int:
     closed = result["gap_closed"]
     lines.append(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}; "
                  f"{result['forward_runs']} forward runs, {seconds:.0f} s")
+    scale = (result["numerical_error"] or {}).get("scale")
+    if scale is not None:
+        lines.append(f"  numerical error in the error model: {scale['estimate']:.3g} x the spread of "
+                     f"{'; '.join(result['numerical_error']['variants'])} ({100 * scale['level']:.0f} % interval "
+                     f"{scale['lower']:.3g}-{scale['upper']:.3g}, cap {scale['maximum']:g}; estimated from the "
+                     "base model's calibration residuals)")
     if args.next_experiment:
         proposal = propose_next_experiment(diag, out, parallel=ctx.parallel() if args.jobs > 1 else None)
         lines += proposal.lines() if proposal else ["next experiment: none proposed (no ambiguity set of two or "

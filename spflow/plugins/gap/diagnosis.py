@@ -5,7 +5,8 @@
 :mod:`~spflow.plugins.gap.figures` draws it.
 
 1. **Calibrate** the base model on the calibration experiments (:mod:`~spflow.plugins.gap.base_calibration`),
-   measure its own numerical error at the calibrated point (other resolutions and schemes) and add it to the error
+   measure its own numerical error at the calibrated point (other resolutions and schemes), estimate how much of
+   it the calibration residuals hold (:mod:`~spflow.plugins.gap.numerical_scale`) and add that much to the error
    model of every block (:mod:`~spflow.plugins.gap.numerical_error`), then recalibrate (warm start). Fit the
    generic-discrepancy competitor (:mod:`~spflow.plugins.gap.discrepancy`).
 2. **Where** — whitened residuals per QoI x slug cell, Ljung-Box whiteness, signature predictive checks, ranked gap
@@ -47,6 +48,7 @@ from .layout import Layout, make_layout
 from .least_squares import Fit, WhitenedProblem, fit
 from .localisation import Cell, cells, gap_cells, ljung_box
 from .numerical_error import DEFAULT_VARIANTS, NumericalSpread, Numerics, inflate, numerical_spread
+from .numerical_scale import NumericalScale, estimate_scale
 from .observed import MEASURABLE, Experiment, load_experiments
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
@@ -84,6 +86,8 @@ class Options:
     loo_draws: int = 2000
     numerical_variants: tuple[Numerics, ...] = DEFAULT_VARIANTS
     numerical_window: int = 3
+    #: cap of the estimated scale of the numerical-error term (:mod:`~spflow.plugins.gap.numerical_scale`)
+    numerical_scale_max: float = 1.0
     discrepancy_degree: int = 2
     subset_pool: int = 4
     #: exact cost reductions on (same results, fewer forward runs and less CPU; ``False``: the behaviour before,
@@ -154,6 +158,7 @@ class GapDiagnosis:
     forward_runs: int
     chi2_measurement_only: float = float("nan")
     numerical: NumericalSpread | None = None
+    numerical_scale: NumericalScale | None = None
     discrepancy: Discrepancy | None = None
     out_of_sample_discrepancy: Predictive | None = None
     search: SearchResult | None = None
@@ -242,6 +247,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     start = time.perf_counter()
     if not calibration:
         raise ParameterError("a diagnosis needs at least one calibration coreflood")
+    if not 0.0 <= options.numerical_scale_max <= 10.0:
+        raise ParameterError(f"numerical_scale_max = {options.numerical_scale_max!r} is out of range; allowed "
+                             "[0, 10] (the cap of the numerical-error scale)")
     cal = load_experiments(calibration, options.pv_step, base.schedules)
     held = load_experiments(heldout, options.pv_step, base.schedules)
     clash = sorted({e.name for e in cal} & {e.name for e in held})
@@ -272,17 +280,22 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                               max_nfev=options.max_nfev, diff_step=options.diff_step,
                               parameter_sets=parameter_sets, polish=polish, economy=options.economy)
     chi2_measurement = base_fit.chi2
-    numerical = None
+    numerical, scale = None, None
     if options.numerical_variants:
         ledger.enter("numerical error")
         numerical = numerical_spread(predictor, base_fit, options.numerical_variants, options.numerical_window)
         ledger.add_runs("numerical error", numerical.runs, numerical.run_cpu)
-        layout_fit, layout_held, layout_all = (inflate(x, numerical.series)
+        # the size of the term: from the base fit's residuals and Jacobian (its forward runs are memoised)
+        y_fit, jac_fit = raw_jacobian(predictor, layout_fit, base_fit, options.diff_step)
+        scale = estimate_scale(layout_fit, numerical.series, y_fit - layout_fit.observed(), jac_fit,
+                               options.nuisance_scale, options.numerical_scale_max)
+        layout_fit, layout_held, layout_all = (inflate(x, numerical.series, scale.estimate)
                                                for x in (layout_fit, layout_held, layout_all))
-        say(f"numerical error of the base model ({'; '.join(numerical.variants)}) added to the error model: "
-            f"chi2 {chi2_measurement:.1f} with measurement error only")
-        ledger.enter("base calibration")
-        base_fit = _recalibrate(predictor, layout_fit, base_fit, options, polish or parameter_sets is None)
+        say(f"numerical error of the base model ({'; '.join(numerical.variants)}), scaled by {scale.label()}, "
+            f"added to the error model: chi2 {chi2_measurement:.1f} with measurement error only")
+        if scale.estimate > 0.0:  # (at s = 0 the error model is the measurement model: the fit stands)
+            ledger.enter("base calibration")
+            base_fit = _recalibrate(predictor, layout_fit, base_fit, options, polish or parameter_sets is None)
     layout_score = layout_held if layout_held.size else layout_fit
     dof = layout_fit.size - len(base.parameters)
     pvalue = float(chi2.sf(base_fit.chi2, dof))
@@ -449,5 +462,5 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         pvalue, pvalue < options.alpha, steps, accepted, decided, ambiguity, reference,
                         _label(reference), w_base, w_ref, base_view, final_view,
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
-                        time.perf_counter() - start, runs, chi2_measurement, numerical, disc, w_disc, search, pool,
-                        search_runs, tried, notes, ledger.table())
+                        time.perf_counter() - start, runs, chi2_measurement, numerical, scale, disc, w_disc, search,
+                        pool, search_runs, tried, notes, ledger.table())

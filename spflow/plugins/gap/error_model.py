@@ -78,6 +78,14 @@ class BlockErrorModel:
         w[1:] = (eps[1:] - self.phi * eps[:-1]) / math.sqrt(1.0 - self.phi**2)
         return w
 
+    def log_determinant(self) -> float:
+        """``log det Sigma`` of the block's error covariance: ``sum 2 log a_t`` plus ``(n - 1) log(1 - phi^2)``
+        for a stationary AR(1) (the whitening recursion is triangular with diagonal ``1 / a_0`` and
+        ``1 / (a_t sqrt(1 - phi^2))``), ``sum 2 log a_t`` for a random walk (diagonal ``1 / a_t``)."""
+        n = self.scale.size
+        stationary = 0.0 if self.integrated or n < 2 else (n - 1) * math.log1p(-self.phi**2)
+        return float(2.0 * np.sum(np.log(self.scale)) + stationary)
+
     def marginal_std(self) -> np.ndarray:
         """Standard deviation of each error ``e_t``."""
         return np.sqrt(np.cumsum(self.scale**2)) if self.integrated else self.scale.copy()

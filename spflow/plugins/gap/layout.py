@@ -66,6 +66,10 @@ class Layout:
         """Whitened residuals of ``e`` (points on axis 0), block by block."""
         return np.concatenate([b.noise.whiten(e[s]) for b, s in zip(self.blocks, self.slices())])
 
+    def log_determinant(self) -> float:
+        """``log det Sigma`` of the whole vector's error covariance (blocks are independent)."""
+        return float(sum(b.noise.log_determinant() for b in self.blocks))
+
     def marginal_std(self) -> np.ndarray:
         return np.concatenate([b.noise.marginal_std() for b in self.blocks])
 

@@ -11,9 +11,11 @@ spread
     d_i = max_v |y_v,i - y_i|       (widened by a running maximum over ``window`` neighbouring grid points,
                                      because a front moved by the numerics moves its error peak too)
 
-is the scale of the numerical error at point ``i``. It enters the error model of every block as an independent
-term added to the measurement variance: each AR(1) scale ``a_i`` becomes ``sqrt(a_i^2 + d_i^2)`` (for an
-integrated block, the random-walk innovation, the increments of ``d``). Every model then -- base, candidates,
+is the shape of the numerical error at point ``i``. It enters the error model of every block as an independent
+term added to the measurement variance: each AR(1) scale ``a_i`` becomes ``sqrt(a_i^2 + s^2 d_i^2)`` (for an
+integrated block, the random-walk innovation, the increments of ``d``), with the factor ``s`` estimated from the
+base model's calibration residuals (:mod:`~spflow.plugins.gap.numerical_scale`: about 0 for data that share the
+model's numerics, about 1 or more for data from other numerics). Every model then -- base, candidates,
 competitors -- is judged with the same covariance: a misfit of the size of the simulator's own numerical error is
 no longer evidence of a missing mechanism (docs/gap.md, Method: **Numerical error**;
 the numerical error as a part of the likelihood covariance, as in Kennedy & O'Hagan 2001).

@@ -22,9 +22,10 @@ Dataset layout (every variable has ``units``; mixed-unit tables name their units
 * scalars and attrs: chi^2, p-value, gap-closed fractions, coverage, ELPD, the verdict and the ambiguity set;
   ``effects`` holds the *declared* effects only (verdict ``effect`` / ``ambiguous``), ``tried_not_declared`` every
   other refitted candidate with its single-effect strength; ``numerical_error`` (variants, forward runs, chi^2
-  with measurement error only, RMS spread per block), ``discrepancy`` (the competitor's terms, calibration chi^2,
-  held-out dELPD over the base), ``search`` (pool, subsets fitted, admissible, chosen, forward runs) and
-  ``notes`` (blocks left out of the report) as JSON.
+  with measurement error only, the estimated scale with its interval and likelihood profile, RMS spread of the
+  variants per block, unscaled) and the scale alone as the number ``numerical_scale``, ``discrepancy`` (the
+  competitor's terms, calibration chi^2, held-out dELPD over the base), ``search`` (pool, subsets fitted,
+  admissible, chosen, forward runs) and ``notes`` (blocks left out of the report) as JSON.
 
 :func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
 """
@@ -307,6 +308,7 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
     if g.numerical is not None:
         numerical = {"variants": g.numerical.variants, "forward_runs": g.numerical.runs,
                      "chi2_base_measurement_only": g.chi2_measurement_only,
+                     "scale": None if g.numerical_scale is None else g.numerical_scale.as_dict(),
                      "rms": {f"{v}:{e}": x for (v, e), x in g.numerical.rms(g.layout_all).items()}}
     discrepancy = None
     if g.discrepancy is not None:
@@ -321,6 +323,7 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         "tried_not_declared": json.dumps([{"name": k, "strength": v} for k, v in g.tried.items()]),
         "search": json.dumps(search),
         "numerical_error": json.dumps(numerical),
+        **({} if g.numerical_scale is None else {"numerical_scale": g.numerical_scale.estimate}),
         "discrepancy": json.dumps(discrepancy),
         "notes": json.dumps(g.notes),
         "accepted_steps": json.dumps(g.accepted),

@@ -66,6 +66,9 @@ OPTION_PARAMS = {
                          doc="shortlisted effects whose subsets (up to max_effects) are refitted jointly"),
     "numerical_error": Param(bool, True, doc="add the base model's own numerical error (2x cells; 2x cells "
                                              "upwind) to the error model"),
+    "numerical_scale_max": Param(float, 1.0, bounds=(0.0, 10.0),
+                                 doc="cap of the numerical-error scale, which is estimated from the base model's "
+                                     "calibration residuals (0: the term is off)"),
     "discrepancy_degree": Param(int, 2, bounds=(0, 6),
                                 doc="degree of the per-slug Legendre discrepancy competitor"),
     "max_nfev": Param(int, 30, bounds=(2, 1000), doc="least-squares iterations per fit"),
