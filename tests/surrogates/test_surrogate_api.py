@@ -11,7 +11,7 @@ from scipy.stats import qmc
 from sklearn.base import clone
 
 from spflow.core.errors import ParameterError
-from spflow.plugins.surrogates import kriging
+from spflow.plugins.surrogates import kriging, pck_model
 from spflow.plugins.surrogates.degree_adaptive import fit_pce
 from spflow.plugins.surrogates.gp_model import GP as GPModel
 from spflow.plugins.surrogates.kriging_stage import GPStage, PCKStage
@@ -143,7 +143,7 @@ def test_pck_trend_indices_equal_the_pce_indices_and_the_analytic_ones_on_a_poly
     np.testing.assert_allclose(pck.total, pce.total, atol=1e-8)
 
 
-def test_share_variable_shares_or_refuses():
+def test_share_variable_shares_or_refuses(monkeypatch):
     x = _lhs(20, BOX, seed=11)
     y = np.column_stack([_quadratic(x), np.sin(300.0 * x[:, 1])])
     shared = GP(BOX, share="variable", restarts=1).fit(x, y)
@@ -153,6 +153,11 @@ def test_share_variable_shares_or_refuses():
     # outputs that each carry their own label: nothing to share -> a clear error, not one model per output
     labelled = OutputIndex(np.array(["a", "b"]), np.array(["", ""]), np.array([np.nan, np.nan]), {"a": "1", "b": "1"})
     lower, upper = np.array(BOX).T
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("PCK fitted its trend before refusing the options")
+
+    monkeypatch.setattr(pck_model, "fit_pce", no_work)
     for cls in (GPModel, PCKModel):
         with pytest.raises(ParameterError, match="each of the 2 outputs has its own label.*share='output'"):
             cls.fit(["p", "q"], lower, upper, labelled, x, y, share="variable", restarts=1)
