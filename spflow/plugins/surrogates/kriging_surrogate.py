@@ -59,11 +59,12 @@ def output_groups(outputs: OutputIndex, share: str) -> np.ndarray:
     keys = [f"{v}\x00{e}" for v, e in zip(outputs.variable, outputs.experiment)]
     group = np.unique(keys, return_inverse=True)[1].ravel()
     if len(outputs) > 1 and group.max() + 1 == len(outputs):
+        labels = sorted({(str(v), str(e)) for v, e in zip(outputs.variable, outputs.experiment)})
+        shown = ", ".join(f"{v}/{e}" if e else v for v, e in labels[:4]) + (", ..." if len(labels) > 4 else "")
         raise ParameterError(f"Kriging share='variable' shares length scales between the outputs of one (variable, "
-                             f"experiment), but each of the {len(outputs)} outputs has its own label "
-                             f"(variables {sorted(set(map(str, outputs.variable)))[:5]}...), so nothing would be "
-                             f"shared: use share='output' (one model per output), or give the outputs that should "
-                             f"share length scales the same variable label")
+                             f"experiment), but each of the {len(outputs)} outputs has its own label ({shown}), so "
+                             f"nothing would be shared: use share='output' (one model per output), or give the "
+                             f"outputs that should share length scales the same variable label")
     return group
 
 
