@@ -29,6 +29,7 @@ _EXPORTS = {
     "load_coreflood": "spflow.io",
     **dict.fromkeys(("Study", "StudyError", "bundled_study", "load_study"), "spflow.study"),
     "synthetic": "",
+    "surrogates": "",
 }
 
 __all__ = sorted([*_EXPORTS, "__version__"])

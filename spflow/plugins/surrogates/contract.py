@@ -63,6 +63,15 @@ class Surrogate(ABC):
     def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Kind-specific prediction on validated points."""
 
+    def predict_mean(self, x: np.ndarray) -> np.ndarray:
+        """Mean only, (n, n_output), at ``x`` (n, n_param) in physical units: for kinds whose variance costs more than
+        their mean (Kriging: an (N, n) triangular product per length-scale group) the variance is not computed."""
+        return self._predict_mean(self.check_points(x))
+
+    def _predict_mean(self, x: np.ndarray) -> np.ndarray:
+        """Kind-specific mean on validated points; a kind with a cheaper mean than :meth:`_predict` overrides it."""
+        return self._predict(x)[0]
+
     def check_points(self, x: np.ndarray) -> np.ndarray:
         """``x`` as a float (n, n_param) array; a wrong width or a non-finite value raises before any work."""
         x = np.atleast_2d(np.asarray(x, dtype=float))

@@ -150,7 +150,7 @@ def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], so
 
 
 def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float | Sequence[float] = 0.9,
-            solver: str = "ols", target_loo: float | None = None, early_stop: bool = True,
+            solver: str = "ols", target_loo: float | None = 0.0, early_stop: bool = True,
             max_terms_ratio: float = MAX_TERMS_RATIO, parallel=None,
             progress: Callable[[int, int], None] | None = None) -> PCEFit:
     """Fit a PCE of ``y`` (N,) or (N, m) at points ``z`` (N, d) of [-1, 1]^d, choosing degree and q as above.

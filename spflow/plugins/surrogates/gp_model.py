@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kriging_surrogate import KrigingSurrogate
+from .kriging_surrogate import RESTARTS, KrigingSurrogate
 from .outputs import OutputIndex
 
 __all__ = ["GP"]
@@ -22,7 +22,7 @@ class GP(KrigingSurrogate):
     @classmethod
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
             y: np.ndarray, *, kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
-            restarts: int = 5, seed: int = 0, parallel=None, progress=None) -> GP:
+            restarts: int = RESTARTS, seed: int = 0, parallel=None, progress=None) -> GP:
         """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
         constant = np.zeros((1, len(names)), dtype=np.int64)
         orders = [np.zeros(1, dtype=np.int64)] * len(outputs)

@@ -142,14 +142,17 @@ class UniversalKriging:
         with single_threaded_blas():
             return 0.5 * (alpha / sigma2) @ alpha.T - 0.5 * sigma2.size * (self.chol_inv.T @ self.chol_inv)
 
-    def predict(self, z: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mean and variance (b, m) at points ``z`` (b, d) whose trend functions are ``basis`` (b, P).
+    def predict(self, z: np.ndarray, basis: np.ndarray, variance: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        """Mean and variance (b, m) at points ``z`` (b, d) whose trend functions are ``basis`` (b, P); with
+        ``variance=False`` the variance (an (n, b) triangular product and the trend term) is skipped and None returned.
 
         Small matrix products: callers that predict many models in a row hold one BLAS thread around them all
         (:func:`.blas.single_threaded_blas`; entering the limit per model cost ~40 µs).
         """
         r = _correlation_of(self.kernel, _scaled_sq_distance(z / self.lengthscale, self._z_scaled))  # (b, n)
         mean = basis @ self.coefficients + r @ self.weights
+        if not variance:
+            return mean, None
         v = self.chol_inv @ r.T  # L⁻¹r, (n, b)
         reduced = 1.0 - np.sum(v**2, axis=0)  # 1 − rᵀR⁻¹r
         u = self.whitened_basis.T @ v - basis.T  # FᵀR⁻¹r − f, (P, b)

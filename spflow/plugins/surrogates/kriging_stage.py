@@ -18,7 +18,7 @@ from spflow.plugins.forward.stage import RESPONSES
 from .contract import SURROGATE, with_parameter_units
 from .gp_model import GP
 from .kriging import KERNELS
-from .kriging_surrogate import SHARING
+from .kriging_surrogate import RESTARTS, SHARING
 from .pce_stage import PCE_PARAMS, check_lists
 from .pck_model import PCK
 from .pck_modes import MODES
@@ -34,7 +34,8 @@ KRIGING_PARAMS = {
                     doc="correlation: gaussian = squared exponential (thesis Eq. 3.20) or matern52"),
     "share": Param(str, "output", choices=list(SHARING),
                    doc="one set of length scales per output column, or per variable (~20x cheaper to evaluate)"),
-    "restarts": Param(int, 3, bounds=(1, 100), doc="L-BFGS-B starts of the likelihood maximisation (Eq. 3.21)"),
+    "restarts": Param(int, RESTARTS, bounds=(1, 100),
+                      doc="L-BFGS-B starts of the likelihood maximisation (Eq. 3.21)"),
     "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="seed of the random restarts"),
     "nugget": Param(float, 1e-8, bounds=(0.0, 0.1), doc="added to the correlation matrix's diagonal"),
 }

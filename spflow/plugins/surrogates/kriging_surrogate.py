@@ -38,19 +38,34 @@ from .kriging import KERNELS, UniversalKriging
 from .outputs import OutputIndex
 from .pck_modes import MODES, fit_group
 
-__all__ = ["KrigingSurrogate", "SHARING", "output_groups"]
+__all__ = ["KrigingSurrogate", "SHARING", "RESTARTS", "output_groups"]
 
 SHARING = ("output", "variable")
+#: Default number of L-BFGS-B starts of the length-scale fit (Eq. 3.21), shared by ``GP.fit``, ``PCK.fit``, their
+#: stages and :mod:`spflow.surrogates`.
+RESTARTS = 3
 
 
 def output_groups(outputs: OutputIndex, share: str) -> np.ndarray:
-    """Group number of every output column for the sharing rule ``share`` (see the module docstring)."""
+    """Group number of every output column for the sharing rule ``share`` (see the module docstring).
+
+    ``share="variable"`` on several outputs that each carry their own (variable, experiment) label would give one
+    group per output, i.e. ``share="output"`` under another name; that is refused rather than done silently.
+    """
     if share not in SHARING:
         raise ParameterError(f"Kriging hyperparameter sharing {share!r} is not known; allowed: {list(SHARING)}")
     if share == "output":
         return np.arange(len(outputs))
     keys = [f"{v}\x00{e}" for v, e in zip(outputs.variable, outputs.experiment)]
-    return np.unique(keys, return_inverse=True)[1].ravel()
+    group = np.unique(keys, return_inverse=True)[1].ravel()
+    if len(outputs) > 1 and group.max() + 1 == len(outputs):
+        labels = sorted({(str(v), str(e)) for v, e in zip(outputs.variable, outputs.experiment)})
+        shown = ", ".join(f"{v}/{e}" if e else v for v, e in labels[:4]) + (", ..." if len(labels) > 4 else "")
+        raise ParameterError(f"Kriging share='variable' shares length scales between the outputs of one (variable, "
+                             f"experiment), but each of the {len(outputs)} outputs has its own label ({shown}), so "
+                             f"nothing would be shared: use share='output' (one model per output), or give the "
+                             f"outputs that should share length scales the same variable label")
+    return group
 
 
 class KrigingSurrogate(Surrogate):
@@ -199,15 +214,24 @@ class KrigingSurrogate(Surrogate):
 
     # -- prediction -------------------------------------------------------------------------------------------------
     def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self._evaluate(x, variance=True)
+
+    def _predict_mean(self, x: np.ndarray) -> np.ndarray:
+        return self._evaluate(x, variance=False)[0]
+
+    def _evaluate(self, x: np.ndarray, variance: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        """Mean and (if ``variance``) variance of every output at validated points ``x``."""
         from .basis import design_matrix
 
         z = self.to_unit(x)
         basis = design_matrix(z, self.indices)
         mean = np.empty((z.shape[0], len(self.outputs)))
-        var = np.empty_like(mean)
+        var = np.empty_like(mean) if variance else None
         with single_threaded_blas():  # many small products: one limit around all the groups
             for cols, used, model in self._models:
-                mean[:, cols], var[:, cols] = model.predict(z, basis[:, used])
+                mean[:, cols], group_var = model.predict(z, basis[:, used], variance)
+                if variance:
+                    var[:, cols] = group_var
         return mean, var
 
     # -- storage ----------------------------------------------------------------------------------------------------

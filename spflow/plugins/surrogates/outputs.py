@@ -34,6 +34,12 @@ class OutputIndex:
     def __len__(self) -> int:
         return int(self.variable.size)
 
+    @classmethod
+    def of_array(cls, m: int, variable: str = "y", unit: str = "1") -> OutputIndex:
+        """The index of ``m`` plain array columns: all labelled ``variable`` (so ``share="variable"`` makes them share
+        length scales), no experiment, no PV, one ``unit`` (``"1"`` when the caller does not know y's unit)."""
+        return cls(np.full(m, variable), np.full(m, ""), np.full(m, np.nan), {variable: unit})
+
     def columns(self, variable: str, experiment: str | None = None) -> np.ndarray:
         """Column numbers of one variable (and experiment), in increasing ``pv``."""
         mask = self.variable == variable

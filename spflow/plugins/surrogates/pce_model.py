@@ -109,13 +109,7 @@ class PCE(Surrogate):
 
     def sobol(self) -> xr.Dataset:
         """First-order and total Sobol indices, dims (output, param)."""
-        first = sobol.first_order(self.indices, self.coefficients)
-        total = sobol.total_order(self.indices, self.coefficients)
-        ds = xr.Dataset({"S1": (("output", "param"), first, {"units": "1"}),
-                         "ST": (("output", "param"), total, {"units": "1"})},
-                        coords={"param": self.names, **self.outputs.coords()})
-        ds.attrs = self.outputs.unit_attrs()
-        return ds
+        return sobol.sobol_dataset(self.names, self.outputs, self.indices, self.coefficients)
 
     def group_sobol(self, params: list[str], closed: bool = False) -> np.ndarray:
         """Interaction (or closed) Sobol index of a group of parameters, per output."""

@@ -17,10 +17,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+import xarray as xr
 
 from spflow.core.errors import ParameterError
 
-__all__ = ["moments", "first_order", "total_order", "group_index"]
+from .outputs import OutputIndex
+
+__all__ = ["moments", "first_order", "total_order", "group_index", "sobol_dataset"]
 
 
 def _check(indices: np.ndarray, coefficients: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -77,3 +80,12 @@ def group_index(indices: np.ndarray, coefficients: np.ndarray, group: Sequence[i
     else:
         mask = (nonzero == u).all(axis=1)
     return _share(c, mask)
+
+
+def sobol_dataset(names: list[str], outputs: OutputIndex, indices: np.ndarray, coefficients: np.ndarray) -> xr.Dataset:
+    """First-order (``S1``) and total (``ST``) indices as a Dataset with dims (output, param), outputs labelled."""
+    ds = xr.Dataset({"S1": (("output", "param"), first_order(indices, coefficients), {"units": "1"}),
+                     "ST": (("output", "param"), total_order(indices, coefficients), {"units": "1"})},
+                    coords={"param": list(names), **outputs.coords()})
+    ds.attrs = outputs.unit_attrs()
+    return ds

@@ -1,0 +1,270 @@
+"""Surrogates as a plain library, in the style of scikit-learn: ``PCE``, ``GP`` and ``PCK`` estimators.
+
+    >>> from spflow.surrogates import PCE
+    >>> model = PCE(bounds=[(100, 200), (0.01, 0.02)]).fit(X, y)   # X (n, 2) in physical units, y (n,) or (n, m)
+    >>> mean, std = model.predict(X_new, return_std=True)          # shaped like y
+    >>> model.sobol_indices().total, model.loo_error_
+
+Each estimator takes its options in the constructor (scikit-learn's convention: ``get_params``/``set_params``/
+``clone`` work, ``score`` is R²), learns from ``fit(X, y)`` and keeps the fitted surrogate of the pipeline contract
+as ``model_`` (:class:`~spflow.plugins.surrogates.contract.Surrogate`: ``to_dataset()`` stores it for the stages that
+``load_surrogate``). They wrap the kinds the stages fit -- :class:`~spflow.plugins.surrogates.pce_model.PCE` (thesis
+§3.5), :class:`~spflow.plugins.surrogates.gp_model.GP` and :class:`~spflow.plugins.surrogates.pck_model.PCK` (§3.8)
+-- with the same defaults as those functions and the stages (docs/surrogates.md, "Use as a library").
+
+The inputs are uniform on the box ``bounds`` (one (lower, upper) pair per input, physical units); only uniform inputs
+are supported. What the API assumes about the data is recorded on ``model_``: input names ``x1..xd`` unless
+``names`` is given; every output column labelled ``y`` with unit ``"1"`` (the API does not know y's unit), so
+``share="variable"`` makes all columns of a vector ``y`` share one set of Kriging length scales.
+
+Bad input -- a wrong shape, a NaN, a point outside ``bounds`` -- raises :class:`~spflow.core.errors.ParameterError`
+naming the argument and the allowed range, before any fitting.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+
+from spflow.core.errors import ParameterError
+from spflow.plugins.surrogates.contract import Surrogate
+from spflow.plugins.surrogates.degree_adaptive import DEGREE_MAX, MAX_TERMS_RATIO
+from spflow.plugins.surrogates.kriging_surrogate import RESTARTS
+from spflow.plugins.surrogates.outputs import OutputIndex
+
+__all__ = ["PCE", "GP", "PCK", "SobolIndices", "SurrogateRegressor"]
+
+
+class SobolIndices(NamedTuple):
+    """First-order and total Sobol indices: shape (d,) for a scalar ``y``, (m, d) for ``y`` of shape (n, m)."""
+
+    first: np.ndarray
+    total: np.ndarray
+
+
+class SurrogateRegressor(RegressorMixin, BaseEstimator):
+    """Common part of the estimators: input checks, ``fit``, ``predict``; subclasses build ``model_``."""
+
+    # -- checks (before any work) -----------------------------------------------------------------------------------
+    def _box(self) -> tuple[np.ndarray, np.ndarray]:
+        """``bounds`` as (lower, upper) arrays of length d."""
+        name = type(self).__name__
+        try:
+            bounds = np.asarray(self.bounds, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{name}: bounds must be numbers, one (lower, upper) pair per input; got "
+                                 f"{self.bounds!r}") from None
+        if bounds.ndim != 2 or bounds.shape[1] != 2 or bounds.shape[0] < 1:
+            raise ParameterError(f"{name}: bounds must have shape (d, 2), one (lower, upper) pair per input; got "
+                                 f"shape {bounds.shape}")
+        bad = np.flatnonzero(~(np.isfinite(bounds).all(axis=1) & (bounds[:, 0] < bounds[:, 1])))
+        if bad.size:
+            i = int(bad[0])
+            raise ParameterError(f"{name}: bounds[{i}] = [{bounds[i, 0]:g}, {bounds[i, 1]:g}] must be finite with "
+                                 f"lower < upper")
+        return bounds[:, 0].copy(), bounds[:, 1].copy()
+
+    def _input_names(self, d: int) -> list[str]:
+        if self.names is None:
+            return [f"x{i + 1}" for i in range(d)]
+        names = [str(n) for n in self.names]
+        if len(names) != d or len(set(names)) != d:
+            raise ParameterError(f"{type(self).__name__}: names must be {d} distinct input names (one per row of "
+                                 f"bounds), got {list(self.names)!r}")
+        return names
+
+    def _points(self, argument: str, X, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """``X`` as a float (n, d) array inside the box (clipped onto it within round-off)."""
+        name, d = type(self).__name__, lower.size
+        try:
+            X = np.asarray(X, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{name}: {argument} must be a numeric array of shape (n, {d})") from None
+        if X.ndim != 2 or X.shape[1] != d or X.shape[0] < 1:
+            raise ParameterError(f"{name}: {argument} must have shape (n, {d}), one column per row of bounds; got "
+                                 f"shape {X.shape}")
+        bad = np.argwhere(~np.isfinite(X))
+        if bad.size:
+            i, j = map(int, bad[0])
+            raise ParameterError(f"{name}: {argument}[{i}, {j}] = {X[i, j]}; {argument} must be finite, column {j} "
+                                 f"in bounds[{j}] = [{lower[j]:g}, {upper[j]:g}]")
+        slack = 1e-9 * (upper - lower)
+        bad = np.argwhere((X < lower - slack) | (X > upper + slack))
+        if bad.size:
+            i, j = map(int, bad[0])
+            raise ParameterError(f"{name}: {argument}[{i}, {j}] = {X[i, j]:g} lies outside bounds[{j}] = "
+                                 f"[{lower[j]:g}, {upper[j]:g}] (the surrogate's input box; it does not extrapolate)")
+        return np.clip(X, lower, upper)
+
+    # -- fitting and prediction ---------------------------------------------------------------------------------------
+    def fit(self, X, y) -> SurrogateRegressor:
+        """Fit on ``X`` (n, d) in physical units inside ``bounds`` and ``y`` (n,) or (n, m); returns self."""
+        lower, upper = self._box()
+        names = self._input_names(lower.size)
+        X = self._points("X", X, lower, upper)
+        name = type(self).__name__
+        try:
+            y = np.asarray(y, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{name}: y must be a numeric array of shape (n,) or (n, m)") from None
+        if y.ndim not in (1, 2) or y.shape[0] != X.shape[0] or (y.ndim == 2 and y.shape[1] < 1):
+            raise ParameterError(f"{name}: y must have shape (n,) or (n, m) with n = {X.shape[0]} rows (one per row "
+                                 f"of X); got shape {y.shape}")
+        bad = np.argwhere(~np.isfinite(y))
+        if bad.size:
+            where = ", ".join(map(str, bad[0]))
+            raise ParameterError(f"{name}: y[{where}] = {y[tuple(bad[0])]}; y must be finite")
+        columns = y.reshape(X.shape[0], -1)
+        self.model_ = self._fit_model(names, lower, upper, OutputIndex.of_array(columns.shape[1]), X, columns)
+        self.scalar_output_ = y.ndim == 1
+        self.n_features_in_ = lower.size
+        return self
+
+    def _fit_model(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
+                   X: np.ndarray, y: np.ndarray) -> Surrogate:
+        """The fitted contract surrogate (subclasses)."""
+        raise NotImplementedError
+
+    def _parallel(self):
+        """A :class:`joblib.Parallel` for ``n_jobs`` > 1, else None."""
+        if isinstance(self.n_jobs, bool) or not isinstance(self.n_jobs, (int, np.integer)) or self.n_jobs == 0:
+            raise ParameterError(f"{type(self).__name__}: n_jobs must be a non-zero integer (joblib's convention: -1 "
+                                 f"= all cores), got {self.n_jobs!r}")
+        if self.n_jobs == 1:
+            return None
+        from joblib import Parallel
+
+        return Parallel(n_jobs=self.n_jobs)
+
+    def _fitted(self) -> Surrogate:
+        if not hasattr(self, "model_"):
+            raise ParameterError(f"{type(self).__name__} is not fitted yet: call fit(X, y) first")
+        return self.model_
+
+    def _shaped(self, a: np.ndarray) -> np.ndarray:
+        """(n, m) -> (n,) when ``fit`` got a scalar y; per-output (m,) -> float likewise."""
+        if not self.scalar_output_:
+            return a
+        return a[..., 0] if a.ndim == 2 else float(a[0])
+
+    def predict(self, X, return_std: bool = False):
+        """The surrogate's mean at ``X`` (n, d) inside ``bounds``, shaped like the training ``y``; with
+        ``return_std=True`` also its standard deviation (same shape). Only then is the variance computed."""
+        model = self._fitted()
+        X = self._points("X", X, model.lower, model.upper)
+        if not return_std:
+            return self._shaped(model.predict_mean(X))
+        mean, variance = model.predict(X)
+        return self._shaped(mean), self._shaped(np.sqrt(variance))
+
+    @property
+    def loo_error_(self):
+        """Relative leave-one-out error per output, Σ e_i² / Σ (y_i − ȳ)² (thesis Eq. 3.8): a float for a scalar y,
+        (m,) otherwise. See the subclass for which LOO."""
+        return self._shaped(self._loo())
+
+    def _loo(self) -> np.ndarray:
+        raise NotImplementedError
+
+
+class _TrendSobol:
+    """``sobol_indices`` read off the orthonormal-Legendre coefficients of ``model_`` (its ``sobol()``)."""
+
+    def sobol_indices(self) -> SobolIndices:
+        """First and total Sobol indices under the uniform inputs: (d,) for a scalar y, (m, d) otherwise."""
+        ds = self._fitted().sobol()
+        first, total = ds["S1"].values, ds["ST"].values  # (m, d)
+        return SobolIndices(first[0], total[0]) if self.scalar_output_ else SobolIndices(first, total)
+
+
+class PCE(_TrendSobol, SurrogateRegressor):
+    """Degree-adaptive polynomial chaos expansion (thesis §3.5, Algorithm 2) on the box ``bounds``.
+
+    Options as :func:`spflow.plugins.surrogates.degree_adaptive.fit_pce` and the ``pce`` stage: ``degree_max``
+    (largest total degree tried), ``q`` (hyperbolic truncation), ``solver`` (``"ols"`` or sparse ``"lars"``),
+    ``target_loo`` (stop once the corrected LOO is below it), ``max_terms_ratio`` (candidate terms per run);
+    ``n_jobs`` spreads the per-output LARS fits. A fit that ends at the degree cap warns
+    (:class:`~spflow.core.errors.DegreeCapWarning`).
+
+    ``predict(X, return_std=True)``'s std is the corrected LOO estimate of the proxy error, sqrt(ε*_LOO · Var̂(y)),
+    constant in X (a PCE has no pointwise error model). ``loo_error_`` is that corrected LOO ε*_LOO (Blatman & Sudret
+    2011), the estimate of the relative validation error. ``sobol_indices()``: first and total indices from the
+    coefficients (Sudret 2008).
+    """
+
+    def __init__(self, bounds, *, names=None, degree_max: int = DEGREE_MAX, q: float = 0.9, solver: str = "ols",
+                 target_loo: float = 0.0, max_terms_ratio: float = MAX_TERMS_RATIO, n_jobs: int = 1):
+        self.bounds, self.names = bounds, names
+        self.degree_max, self.q, self.solver, self.target_loo = degree_max, q, solver, target_loo
+        self.max_terms_ratio, self.n_jobs = max_terms_ratio, n_jobs
+
+    def _fit_model(self, names, lower, upper, outputs, X, y) -> Surrogate:
+        from spflow.plugins.surrogates.pce_model import PCE as PCEModel
+
+        return PCEModel.fit(names, lower, upper, outputs, X, y, degree_max=self.degree_max, q=self.q,
+                            solver=self.solver, target_loo=self.target_loo, max_terms_ratio=self.max_terms_ratio,
+                            parallel=self._parallel())
+
+    def _loo(self) -> np.ndarray:
+        return self._fitted().modified_loo
+
+
+class _Kriging(SurrogateRegressor):
+    """Options common to the Kriging estimators (as ``GP.fit``/``PCK.fit`` and the ``gp``/``pck`` stages)."""
+
+    def _kriging_options(self) -> dict:
+        return {"kernel": self.kernel, "share": self.share, "nugget": self.nugget, "restarts": self.restarts,
+                "seed": self.seed, "parallel": self._parallel()}
+
+    def _loo(self) -> np.ndarray:
+        return self._fitted().loo
+
+
+class GP(_Kriging):
+    """Gaussian process (ordinary Kriging, thesis §3.8 with a constant trend) on the box ``bounds``.
+
+    ``kernel`` (``"gaussian"`` = squared exponential, Eq. 3.20, or ``"matern52"``), maximum-likelihood ARD length
+    scales (Eq. 3.21) from ``restarts`` seeded L-BFGS-B starts, ``nugget`` on the correlation diagonal; for a vector
+    ``y``, ``share="output"`` fits one model per column, ``share="variable"`` one set of length scales for all columns
+    (each keeps its own mean and variance). ``n_jobs`` spreads the per-column fits. ``predict(X, return_std=True)``
+    gives the Kriging standard deviation; ``loo_error_`` is the Kriging (Dubrule) LOO.
+    """
+
+    def __init__(self, bounds, *, names=None, kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
+                 restarts: int = RESTARTS, seed: int = 0, n_jobs: int = 1):
+        self.bounds, self.names = bounds, names
+        self.kernel, self.share, self.nugget, self.restarts, self.seed = kernel, share, nugget, restarts, seed
+        self.n_jobs = n_jobs
+
+    def _fit_model(self, names, lower, upper, outputs, X, y) -> Surrogate:
+        from spflow.plugins.surrogates.gp_model import GP as GPModel
+
+        return GPModel.fit(names, lower, upper, outputs, X, y, **self._kriging_options())
+
+
+class PCK(_TrendSobol, _Kriging):
+    """PC-Kriging (thesis §3.8, Eq. 3.19): universal Kriging on a sparse-PCE (hybrid LARS) Legendre trend.
+
+    ``degree_max`` and ``q`` bound the trend's PCE, ``mode`` is ``"sequential"`` (the whole LARS-selected trend) or
+    ``"optimal"`` (the LOO-best LARS-ranked prefix); the Kriging options are :class:`GP`'s.
+    """
+
+    def __init__(self, bounds, *, names=None, degree_max: int = 3, q: float = 0.9, mode: str = "sequential",
+                 kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8, restarts: int = RESTARTS,
+                 seed: int = 0, n_jobs: int = 1):
+        self.bounds, self.names, self.degree_max, self.q, self.mode = bounds, names, degree_max, q, mode
+        self.kernel, self.share, self.nugget, self.restarts, self.seed = kernel, share, nugget, restarts, seed
+        self.n_jobs = n_jobs
+
+    def _fit_model(self, names, lower, upper, outputs, X, y) -> Surrogate:
+        from spflow.plugins.surrogates.pck_model import PCK as PCKModel
+
+        return PCKModel.fit(names, lower, upper, outputs, X, y, degree_max=self.degree_max, q=self.q, mode=self.mode,
+                            **self._kriging_options())
+
+    def sobol_indices(self) -> SobolIndices:
+        """First and total Sobol indices of the PC-Kriging *trend* (its GLS Legendre coefficients). The Kriging
+        part σ² Z(ξ) is NOT included: these are the model's indices only where the trend carries the response."""
+        return super().sobol_indices()
