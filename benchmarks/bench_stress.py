@@ -20,8 +20,8 @@ flags uniformly;
 the cross-parameter rules (``resolve_params``) by construction: the three low-Nc residuals redrawn until their sum
 is < 1, each high-Nc residual uniform in [0, its low-Nc one], CSEL/CSEU sorted, F6S uniform in [0, min(1, 1/BETA6)),
 ``SWI`` uniform in [``S1RWC``, 1].
-Effect strengths are drawn the same way. A case whose polymer-solution viscosity exceeds the physical cap
-(``polymer_viscosity_cap``: ``simulate`` rejects it with a ``ParameterError``) is redrawn whole, and the redraws are
+Effect strengths are drawn the same way. A case whose injected-fluid viscosity exceeds the physical cap
+(``injected_viscosity_cap``: ``simulate`` rejects it with a ``ParameterError``) is redrawn whole, and the redraws are
 counted (``--no-cap`` keeps every draw: the draws of the issue-22 runs before the cap, whose numbers
 docs/forward_model.md quotes). Draw ``k`` is the ``k``-th case of the seeded stream; ``--draws 107,124`` runs only
 those (with ``--max-steps F``: a step budget of ``F`` times the expected steps, so an over-budget draw stops in
@@ -47,7 +47,8 @@ from spflow.plugins.forward.budgets import expected_steps  # noqa: E402
 from spflow.plugins.forward.effects import BUILTIN_EFFECTS, default_registry  # noqa: E402
 from spflow.plugins.forward.errors import SimulationError  # noqa: E402
 from spflow.plugins.forward.parameters import PARAMETERS, resolve_params  # noqa: E402
-from spflow.plugins.forward.polymer_viscosity_cap import check_polymer_viscosity, peak_polymer_viscosity  # noqa: E402
+from spflow.plugins.forward.injected_viscosity_cap import (  # noqa: E402
+    check_injected_viscosity, peak_injected_viscosity)
 from spflow.plugins.forward.schedule import BCF_SCHEDULES  # noqa: E402
 from spflow.plugins.forward.simulate import simulate  # noqa: E402
 
@@ -71,7 +72,7 @@ def _draw(rng, lower, upper, integer=False):
 
 def draw_case(rng, cap: bool = True) -> tuple[dict, int]:
     """One in-bounds case ``{"schedule", "cells", "params", "effects"}`` and the number of cases rejected before it
-    by the polymer-viscosity cap (redrawn; none with ``cap=False``)."""
+    by the injected-viscosity cap (redrawn; none with ``cap=False``)."""
     registry = default_registry()
     rejected = 0
     while True:
@@ -79,7 +80,7 @@ def draw_case(rng, cap: bool = True) -> tuple[dict, int]:
         if not cap:
             return case, rejected
         try:
-            check_polymer_viscosity(resolve_params(case["params"]), registry.resolve(case["effects"]),
+            check_injected_viscosity(resolve_params(case["params"]), registry.resolve(case["effects"]),
                                     BCF_SCHEDULES[case["schedule"]])
         except ParameterError:
             rejected += 1
@@ -115,9 +116,9 @@ def capillary_scale(case: dict) -> float:
     return p["PERM"] * 9.869233e-16 * pc0 / (p["VIS1"] * 1.0e-3 * u * p["LENGTH"])
 
 
-def polymer_peak(case: dict) -> float:
-    """The case's peak zero-shear polymer-solution viscosity (cP, ``polymer_viscosity_cap``)."""
-    return peak_polymer_viscosity(resolve_params(case["params"]), default_registry().resolve(case["effects"]),
+def injected_peak(case: dict) -> float:
+    """The case's largest injected-fluid viscosity (cP, ``injected_viscosity_cap``)."""
+    return peak_injected_viscosity(resolve_params(case["params"]), default_registry().resolve(case["effects"]),
                                   BCF_SCHEDULES[case["schedule"]])[0]
 
 
@@ -169,7 +170,7 @@ def main() -> None:
     parser.add_argument("--capillary", choices=["explicit", "implicit"], default="explicit",
                         help="time discretisation of the capillary flux (simulate's option)")
     parser.add_argument("--no-cap", action="store_true",
-                        help="keep draws above the polymer-viscosity cap (the draws of the runs before the cap)")
+                        help="keep draws above the injected-viscosity cap (the draws of the runs before the cap)")
     parser.add_argument("--draws", help="comma-separated draw indices to run (default: all N)")
     parser.add_argument("--max-steps", type=float, help="step budget as a multiple of the expected steps")
     args = parser.parse_args()
@@ -193,7 +194,7 @@ def main() -> None:
     failed = [r for r in results if r["failure"]]
     reasons: dict[str, int] = {}
     for r in failed:  # by kind, without the budget value
-        kind = r["failure"].split(" [")[0].split(": polymer-solution viscosity")[0]
+        kind = r["failure"].split(" [")[0].split(": injected-fluid viscosity")[0]
         reasons[kind] = reasons.get(kind, 0) + 1
     walls = [r["wall"] for r in results]
     median = statistics.median(walls)
@@ -218,14 +219,14 @@ def main() -> None:
     print(f"{'runs mostly capillary-limited':40s} {sum(r['capillary'] > r['steps'] / 2 for r in ok)}")
     order = sorted(range(len(results)), key=lambda i: -results[i]["wall"])[: args.slowest]
     print("slowest draws: index, schedule, cells, steps / expected, halvings, capillary-limited steps, ramp-limited "
-          "steps, wall s, capillary diffusivity scale D_pc, VIS2/VIS1, peak polymer viscosity cP, failure")
+          "steps, wall s, capillary diffusivity scale D_pc, VIS2/VIS1, peak injected viscosity cP, failure")
     for i in order:
         r = results[i]
         ratio = f"{r['steps'] / r['expected']:8.2f}" if r["steps"] > 0 else "       -"
         print(f"  {indices[i]:6d} {r['schedule']} {r['cells']:4d} {ratio} {r.get('halvings', -1):8d}"
               f" {r.get('capillary', -1):8d} {r.get('ramp', -1):6d} {r['wall']:8.2f}"
               f" {capillary_scale(cases[i]):9.3g} {cases[i]['params']['VIS2'] / cases[i]['params']['VIS1']:9.3g}"
-              f" {polymer_peak(cases[i]):9.3g} {r['failure'][:160]}")
+              f" {injected_peak(cases[i]):9.3g} {r['failure'][:160]}")
 
 
 if __name__ == "__main__":

@@ -9,8 +9,8 @@ A design row becomes forward-model parameters through the design's parameter map
 (:class:`~spflow.plugins.design.parameter_map.ParameterMap`: a column may set several UTCHEM names, or hold log10 of
 the value). Samples
 run in parallel with the node's joblib budget; the simulator is deterministic, so serial and parallel runs are
-bit-identical. Every sample's run arguments (parameters, effects, the polymer-viscosity cap of
-:mod:`~spflow.plugins.forward.polymer_viscosity_cap`) are validated before any simulation starts.
+bit-identical. Every sample's run arguments (parameters, effects, the injected-viscosity cap of
+:mod:`~spflow.plugins.forward.injected_viscosity_cap`) are validated before any simulation starts.
 
 Failure policy: a sample whose run of any experiment raises ``SimulationError`` (a time-step collapse, or a step or
 wall-time budget exhausted, ``budgets``) does not abort the stage: its rows are NaN for every experiment and the
@@ -111,7 +111,7 @@ class Forward(Stage):
         fixed, effects = dict(self.params["fixed"]), dict(self.params["effects"])
         experiments = forward_experiments(self.params["experiments"], fixed)
         rows = self._rows(design)
-        for row in rows:  # validate everything before any simulation (parameters, effects, the viscosity cap)
+        for row in rows:  # validate everything before any simulation (parameters, effects, viscosity cap)
             for exp in experiments:
                 validate_run(exp.schedule, dict(fixed, **exp.params, **row), self.params["cells"], effects,
                              self.params["scheme"], self.params["pv_step"], None, 0.5)
