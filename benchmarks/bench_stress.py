@@ -25,7 +25,8 @@ Effect strengths are drawn the same way. A case whose injected-fluid viscosity e
 counted (``--no-cap`` keeps every draw: the draws of the issue-22 runs before the cap, whose numbers
 docs/forward_model.md quotes). Draw ``k`` is the ``k``-th case of the seeded stream; ``--draws 107,124`` runs only
 those (with ``--max-steps F``: a step budget of ``F`` times the expected steps, so an over-budget draw stops in
-seconds). Runs go through joblib (``--jobs``, default 2 workers).
+seconds). ``--save FILE`` writes every run as it finishes; ``--resume`` continues an interrupted run from that file.
+Runs go through joblib (``--jobs``, default 2 workers).
 """
 
 from __future__ import annotations
@@ -173,21 +174,35 @@ def main() -> None:
                         help="keep draws above the injected-viscosity cap (the draws of the runs before the cap)")
     parser.add_argument("--draws", help="comma-separated draw indices to run (default: all N)")
     parser.add_argument("--max-steps", type=float, help="step budget as a multiple of the expected steps")
+    parser.add_argument("--resume", action="store_true",
+                        help="with --save: keep the runs already in that file (same seed and N) and run the rest")
     args = parser.parse_args()
+    if args.resume and not args.save:
+        parser.error("--resume needs --save FILE")
     rng = np.random.default_rng(args.seed)
     drawn = [draw_case(rng, cap=not args.no_cap) for _ in range(args.n)]
     cases = [case for case, _ in drawn]
     rejected = sum(r for _, r in drawn)
     indices = [int(k) for k in args.draws.split(",")] if args.draws else list(range(args.n))
+    done = {}
+    if args.resume and os.path.exists(args.save):
+        with open(args.save) as fh:
+            for line in fh:
+                row = json.loads(line)
+                if row["case"] != cases[row["index"]]:
+                    raise SystemExit(f"{args.save}: draw {row['index']} differs from this seed/N; not resuming")
+                done[row["index"]] = row["result"]
+        print(f"resuming: {len(done)} runs already in {args.save}")
+    todo = [k for k in indices if k not in done]
     simulate("BCF1", cells=30)  # compile / load the cached kernel
     start = time.perf_counter()
-    results = []
-    with open(args.save or os.devnull, "w") as fh:  # one JSON line per run as it finishes
-        for i, r in zip(indices, Parallel(n_jobs=args.jobs, return_as="generator")(
-                delayed(run_case)(cases[k], args.max_wall, args.capillary, args.max_steps) for k in indices)):
-            results.append(r)
+    with open(args.save or os.devnull, "a" if args.resume else "w") as fh:  # one JSON line per run as it finishes
+        for i, r in zip(todo, Parallel(n_jobs=args.jobs, return_as="generator")(
+                delayed(run_case)(cases[k], args.max_wall, args.capillary, args.max_steps) for k in todo)):
+            done[i] = r
             fh.write(json.dumps({"index": i, "case": cases[i], "result": r}) + "\n")
             fh.flush()
+    results = [done[k] for k in indices]
     cases = [cases[k] for k in indices]
     elapsed = time.perf_counter() - start
     ok = [r for r in results if not r["failure"]]
