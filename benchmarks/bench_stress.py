@@ -20,7 +20,13 @@ flags uniformly;
 the cross-parameter rules (``resolve_params``) by construction: the three low-Nc residuals redrawn until their sum
 is < 1, each high-Nc residual uniform in [0, its low-Nc one], CSEL/CSEU sorted, F6S uniform in [0, min(1, 1/BETA6)),
 ``SWI`` uniform in [``S1RWC``, 1].
-Effect strengths are drawn the same way. Runs go through joblib (``--jobs``, default 2 workers).
+Effect strengths are drawn the same way. A case whose injected-fluid viscosity exceeds the physical cap
+(``injected_viscosity_cap``: ``simulate`` rejects it with a ``ParameterError``) is redrawn whole, and the redraws are
+counted (``--no-cap`` keeps every draw: the draws of the issue-22 runs before the cap, whose numbers
+docs/forward_model.md quotes). Draw ``k`` is the ``k``-th case of the seeded stream; ``--draws 107,124`` runs only
+those (with ``--max-steps F``: a step budget of ``F`` times the expected steps, so an over-budget draw stops in
+seconds). ``--save FILE`` writes every run as it finishes; ``--resume`` continues an interrupted run from that file.
+Runs go through joblib (``--jobs``, default 2 workers).
 """
 
 from __future__ import annotations
@@ -37,10 +43,13 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from joblib import Parallel, delayed  # noqa: E402
 
+from spflow.core.errors import ParameterError  # noqa: E402
 from spflow.plugins.forward.budgets import expected_steps  # noqa: E402
-from spflow.plugins.forward.effects import BUILTIN_EFFECTS  # noqa: E402
+from spflow.plugins.forward.effects import BUILTIN_EFFECTS, default_registry  # noqa: E402
 from spflow.plugins.forward.errors import SimulationError  # noqa: E402
 from spflow.plugins.forward.parameters import PARAMETERS, resolve_params  # noqa: E402
+from spflow.plugins.forward.injected_viscosity_cap import (  # noqa: E402
+    check_injected_viscosity, peak_injected_viscosity)
 from spflow.plugins.forward.schedule import BCF_SCHEDULES  # noqa: E402
 from spflow.plugins.forward.simulate import simulate  # noqa: E402
 
@@ -62,8 +71,26 @@ def _draw(rng, lower, upper, integer=False):
     return float(rng.uniform(lower, upper))
 
 
-def draw_case(rng) -> dict:
-    """One in-bounds case: ``{"schedule", "cells", "params", "effects"}``."""
+def draw_case(rng, cap: bool = True) -> tuple[dict, int]:
+    """One in-bounds case ``{"schedule", "cells", "params", "effects"}`` and the number of cases rejected before it
+    by the injected-viscosity cap (redrawn; none with ``cap=False``)."""
+    registry = default_registry()
+    rejected = 0
+    while True:
+        case = _draw_once(rng)
+        if not cap:
+            return case, rejected
+        try:
+            check_injected_viscosity(resolve_params(case["params"]), registry.resolve(case["effects"]),
+                                    BCF_SCHEDULES[case["schedule"]])
+        except ParameterError:
+            rejected += 1
+            continue
+        return case, rejected
+
+
+def _draw_once(rng) -> dict:
+    """One case inside the bounds and the cross-parameter rules of ``resolve_params``."""
     params = {s.name: _draw(rng, s.lower, s.upper, s.integer) for s in PARAMETERS}
     spec = {s.name: s for s in PARAMETERS}
     while params["S1RWC"] + params["S2RWC"] + params["S3RWC"] >= 1.0:  # residuals leave a mobile window
@@ -90,16 +117,29 @@ def capillary_scale(case: dict) -> float:
     return p["PERM"] * 9.869233e-16 * pc0 / (p["VIS1"] * 1.0e-3 * u * p["LENGTH"])
 
 
-def run_case(case: dict, max_wall_s: float | None = None, capillary: str = "explicit") -> dict:
-    """Run one case; returns the measures of the module docstring (``failure``: the reason, or ``""``)."""
+def injected_peak(case: dict) -> float:
+    """The case's largest injected-fluid viscosity (cP, ``injected_viscosity_cap``)."""
+    return peak_injected_viscosity(resolve_params(case["params"]), default_registry().resolve(case["effects"]),
+                                  BCF_SCHEDULES[case["schedule"]])[0]
+
+
+def run_case(case: dict, max_wall_s: float | None = None, capillary: str = "explicit",
+             max_steps_factor: float | None = None) -> dict:
+    """Run one case; returns the measures of the module docstring (``failure``: the reason, or ``""``).
+    ``max_steps_factor``: a step budget of that many times the expected steps (default: simulate's)."""
     total = BCF_SCHEDULES[case["schedule"]].total_pv
     out = {"schedule": case["schedule"], "cells": case["cells"], "expected": expected_steps(total, case["cells"], 0.5)}
+    max_steps = None if max_steps_factor is None else max(1, int(max_steps_factor * out["expected"]))
     cpu0, start = time.process_time(), time.perf_counter()
     try:
         ds = simulate(case["schedule"], case["params"], cells=case["cells"], effects=case["effects"], pv_step=0.01,
-                      profiles_at=[total], max_wall_s=max_wall_s, capillary=capillary)
+                      profiles_at=[total], max_wall_s=max_wall_s, capillary=capillary, max_steps=max_steps)
     except SimulationError as err:
         out.update(failure=err.reason, pv=err.pv, cell=err.cell, wall=time.perf_counter() - start,
+                   cpu=time.process_time() - cpu0, steps=-1)
+        return out
+    except ParameterError as err:  # only with --no-cap: simulate rejects the case before any work
+        out.update(failure=f"rejected before any work: {err}", wall=time.perf_counter() - start,
                    cpu=time.process_time() - cpu0, steps=-1)
         return out
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu0
@@ -130,53 +170,78 @@ def main() -> None:
     parser.add_argument("--save", help="write every case and result as JSON lines to this file")
     parser.add_argument("--capillary", choices=["explicit", "implicit"], default="explicit",
                         help="time discretisation of the capillary flux (simulate's option)")
+    parser.add_argument("--no-cap", action="store_true",
+                        help="keep draws above the injected-viscosity cap (the draws of the runs before the cap)")
+    parser.add_argument("--draws", help="comma-separated draw indices to run (default: all N)")
+    parser.add_argument("--max-steps", type=float, help="step budget as a multiple of the expected steps")
+    parser.add_argument("--resume", action="store_true",
+                        help="with --save: keep the runs already in that file (same seed and N) and run the rest")
     args = parser.parse_args()
+    if args.resume and not args.save:
+        parser.error("--resume needs --save FILE")
     rng = np.random.default_rng(args.seed)
-    cases = [draw_case(rng) for _ in range(args.n)]
+    drawn = [draw_case(rng, cap=not args.no_cap) for _ in range(args.n)]
+    cases = [case for case, _ in drawn]
+    rejected = sum(r for _, r in drawn)
+    indices = [int(k) for k in args.draws.split(",")] if args.draws else list(range(args.n))
+    done = {}
+    if args.resume and os.path.exists(args.save):
+        with open(args.save) as fh:
+            for line in fh:
+                row = json.loads(line)
+                if row["case"] != cases[row["index"]]:
+                    raise SystemExit(f"{args.save}: draw {row['index']} differs from this seed/N; not resuming")
+                done[row["index"]] = row["result"]
+        print(f"resuming: {len(done)} runs already in {args.save}")
+    todo = [k for k in indices if k not in done]
     simulate("BCF1", cells=30)  # compile / load the cached kernel
     start = time.perf_counter()
-    results = []
-    with open(args.save or os.devnull, "w") as fh:  # one JSON line per run as it finishes
-        for i, r in enumerate(Parallel(n_jobs=args.jobs, return_as="generator")(
-                delayed(run_case)(c, args.max_wall, args.capillary) for c in cases)):
-            results.append(r)
+    with open(args.save or os.devnull, "a" if args.resume else "w") as fh:  # one JSON line per run as it finishes
+        for i, r in zip(todo, Parallel(n_jobs=args.jobs, return_as="generator")(
+                delayed(run_case)(cases[k], args.max_wall, args.capillary, args.max_steps) for k in todo)):
+            done[i] = r
             fh.write(json.dumps({"index": i, "case": cases[i], "result": r}) + "\n")
             fh.flush()
+    results = [done[k] for k in indices]
+    cases = [cases[k] for k in indices]
     elapsed = time.perf_counter() - start
     ok = [r for r in results if not r["failure"]]
     failed = [r for r in results if r["failure"]]
     reasons: dict[str, int] = {}
     for r in failed:  # by kind, without the budget value
-        kind = r["failure"].split(" [")[0]
+        kind = r["failure"].split(" [")[0].split(": injected-fluid viscosity")[0]
         reasons[kind] = reasons.get(kind, 0) + 1
     walls = [r["wall"] for r in results]
     median = statistics.median(walls)
-    print(f"{args.n} draws (BCF1-3, 30-100 cells, parameters and effects in bounds), {args.jobs} workers, "
+    print(f"{len(indices)} draws (BCF1-3, 30-100 cells, parameters and effects in bounds), {args.jobs} workers, "
           f"{elapsed:.0f} s, load average {os.getloadavg()[0]:.1f}")
+    print(f"{'draws rejected by the viscosity cap':40s} {rejected} (redrawn; {args.n} kept)"
+          if not args.no_cap else f"{'viscosity cap':40s} off (--no-cap)")
     print(f"{'finished runs':40s} {len(ok)}")
-    print(f"{'failed runs (SimulationError)':40s} {len(failed)}")
+    print(f"{'failed runs (SimulationError, rejected)':40s} {len(failed)}")
     for reason, count in sorted(reasons.items(), key=lambda kv: -kv[1]):
         print(f"    {count:6d}  {reason}")
     print(f"{'NaN/inf values':40s} {sum(r['nonfinite'] for r in ok)}")
     print(f"{'bound violations':40s} {sum(r['violations'] for r in ok)}")
     print(f"{'max relative mass-balance error':40s} {max((r['balance'] for r in ok), default=float('nan')):.2e}")
     print(f"{'runs beyond the budget':40s} {sum('budget' in r['failure'] for r in failed)}")
-    print(f"{'median steps / expected':40s} {statistics.median(r['steps'] / r['expected'] for r in ok):.3f}")
-    print(f"{'max steps / expected':40s} {max(r['steps'] / r['expected'] for r in ok):.2f}")
+    if ok:
+        print(f"{'median steps / expected':40s} {statistics.median(r['steps'] / r['expected'] for r in ok):.3f}")
+        print(f"{'max steps / expected':40s} {max(r['steps'] / r['expected'] for r in ok):.2f}")
     print(f"{'median wall time (s)':40s} {median:.4f}")
     print(f"{'slowest run wall time / median':40s} {max(walls) / median:.1f}")
     print(f"{'runs with halvings':40s} {sum(r['halvings'] > 0 for r in ok)}")
     print(f"{'runs mostly capillary-limited':40s} {sum(r['capillary'] > r['steps'] / 2 for r in ok)}")
     order = sorted(range(len(results)), key=lambda i: -results[i]["wall"])[: args.slowest]
     print("slowest draws: index, schedule, cells, steps / expected, halvings, capillary-limited steps, ramp-limited "
-          "steps, wall s, capillary diffusivity scale D_pc, VIS2/VIS1, failure")
+          "steps, wall s, capillary diffusivity scale D_pc, VIS2/VIS1, peak injected viscosity cP, failure")
     for i in order:
         r = results[i]
         ratio = f"{r['steps'] / r['expected']:8.2f}" if r["steps"] > 0 else "       -"
-        print(f"  {i:6d} {r['schedule']} {r['cells']:4d} {ratio} {r.get('halvings', -1):8d}"
+        print(f"  {indices[i]:6d} {r['schedule']} {r['cells']:4d} {ratio} {r.get('halvings', -1):8d}"
               f" {r.get('capillary', -1):8d} {r.get('ramp', -1):6d} {r['wall']:8.2f}"
               f" {capillary_scale(cases[i]):9.3g} {cases[i]['params']['VIS2'] / cases[i]['params']['VIS1']:9.3g}"
-              f" {r['failure']}")
+              f" {injected_peak(cases[i]):9.3g} {r['failure'][:160]}")
 
 
 if __name__ == "__main__":

@@ -12,6 +12,7 @@ from spflow.core.errors import ParameterError
 from . import effects as E
 from .checks import check_number
 from .parameters import resolve_params
+from .injected_viscosity_cap import check_injected_viscosity
 from .schedule import as_schedule
 
 __all__ = ["SCHEMES", "CAPILLARY", "MAX_CELLS", "output_grid", "common_grid", "validate_run"]
@@ -55,8 +56,9 @@ def _check_cells(cells):
 
 def validate_run(schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl, check_cells=_check_cells):
     """Every argument of a run checked before any work (``ParameterError`` naming the argument and its allowed
-    range): returns ``(schedule, resolved parameters, effect strengths, effect registry, cells, pv_step, profile
-    times, cfl)``. ``check_cells`` validates ``cells`` (1-D: an integer; the 2-D model passes its own)."""
+    range; the viscosity of the run's injected fluids against its physical cap, ``injected_viscosity_cap``):
+    returns ``(schedule, resolved parameters, effect strengths, effect registry, cells, pv_step, profile times,
+    cfl)``. ``check_cells`` validates ``cells`` (1-D: an integer; the 2-D model passes its own)."""
     sched = as_schedule(schedule)
     total = sched.total_pv
     cells = check_cells(cells)
@@ -83,4 +85,5 @@ def validate_run(schedule, params, cells, effects, scheme, pv_step, profiles_at,
         effect = registry[name]
         if name not in E.BUILTIN_NAMES and effect.transform_params is not None:
             resolved = resolve_params(effect.transform_params(dict(resolved), s))
+    check_injected_viscosity(resolved, strengths, sched)
     return sched, resolved, strengths, registry, cells, pv_step, prof, cfl

@@ -9,7 +9,8 @@ A design row becomes forward-model parameters through the design's parameter map
 (:class:`~spflow.plugins.design.parameter_map.ParameterMap`: a column may set several UTCHEM names, or hold log10 of
 the value). Samples
 run in parallel with the node's joblib budget; the simulator is deterministic, so serial and parallel runs are
-bit-identical. Every sample's parameters are validated before any simulation starts.
+bit-identical. Every sample's run arguments (parameters, effects, the injected-viscosity cap of
+:mod:`~spflow.plugins.forward.injected_viscosity_cap`) are validated before any simulation starts.
 
 Failure policy: a sample whose run of any experiment raises ``SimulationError`` (a time-step collapse, or a step or
 wall-time budget exhausted, ``budgets``) does not abort the stage: its rows are NaN for every experiment and the
@@ -33,7 +34,7 @@ from spflow.plugins.forward.budgets import DEFAULT_MAX_WALL_S
 from spflow.plugins.forward.errors import SimulationError
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.numba_cache import source_digest
-from spflow.plugins.forward.parameters import resolve_params
+from spflow.plugins.forward.run_arguments import validate_run
 from spflow.plugins.forward.simulate import common_grid, simulate
 
 #: Response variables of the simulator and their units.
@@ -120,9 +121,10 @@ class Forward(Stage):
         fixed, effects = dict(self.params["fixed"]), dict(self.params["effects"])
         experiments = forward_experiments(self.params["experiments"], fixed)
         rows = self._rows(design)
-        for row in rows:  # validate everything before any simulation
+        for row in rows:  # validate everything before any simulation (parameters, effects, viscosity cap)
             for exp in experiments:
-                resolve_params(dict(fixed, **exp.params, **row))
+                validate_run(exp.schedule, dict(fixed, **exp.params, **row), self.params["cells"], effects,
+                             self.params["scheme"], self.params["pv_step"], None, 0.5)
         args = (self.params["cells"], effects, self.params["scheme"], self.params["pv_step"],
                 self.params["max_steps"], self.params["max_wall_s"])
         from joblib import delayed
