@@ -171,3 +171,22 @@ def test_mh_sampler_reports_its_steps():
     # burn-in plus the kept draws times the thinning: 500 + (2000 - 500) // 2 * 2 steps per chain
     assert reports[0] == ("mh", 0, 2000, "steps") and reports[-1] == ("mh", 2000, 2000, "steps")
     assert [r[1] for r in reports] == sorted(r[1] for r in reports)
+
+
+def test_emcee_sampler_reports_its_steps_in_process_and_draws_as_in_workers():
+    """With one worker the runs execute in the stage's process and report every ensemble step; the draws equal those
+    of two workers (which report finished runs)."""
+    rng = np.random.default_rng(3)
+    index, a, b, y = _problem({("dp", "BCF1"): 8, ("oil_cut", "BCF1"): 8}, [0.5, 0.2], rng)
+    toy = LinearToy(NAMES, [-5, -5], [5, 5], index, a, b, np.zeros(16))
+    params = {"samples": 1_600, "burn": 320, "thin": 2, "chains": 2, "walkers": 8, "seed": 7}
+    runs, reports = {}, {1: [], 2: []}
+    for jobs in (1, 2):
+        ctx = StageContext("em", n_jobs=jobs, verbose=False, report=lambda *r, j=jobs: reports[j].append(r))
+        runs[jobs] = EmceeSampler(**params).run(ctx, surrogate=toy.to_dataset(), observations=observations_for(index, y),
+                                                space=space_for(NAMES, [-5, -5], [5, 5]))
+    np.testing.assert_array_equal(runs[1]["theta"].values, runs[2]["theta"].values)
+    # per run: 320 // 8 = 40 burn-in steps + (1600 - 320) // (8 x 2) = 80 kept draws x thin 2 = 200 steps; 2 runs
+    assert reports[1][0] == ("em", 0, 400, "steps") and reports[1][-1] == ("em", 400, 400, "steps")
+    assert [r[1] for r in reports[1]] == sorted(r[1] for r in reports[1])
+    assert reports[2][-1] == ("em", 2, 2, "runs")

@@ -87,12 +87,23 @@ class EmceeSampler(SamplerStage):
 
     def _sample_runs(self, ctx: StageContext, model: PosteriorModel,
                      seeds: list[np.random.SeedSequence]) -> list[ChainResult]:
-        """Independent runs in parallel with the node's joblib budget."""
+        """Independent runs in parallel with the node's joblib budget. With one worker they run in this process, one
+        after another, and report every ensemble step (burn-in and kept, times the thinning) of every run; with
+        several, each runs in a worker and the progress is the runs finished."""
+        if ctx.n_jobs == 1:
+            burn, keep = self._iterations(self.walkers(model))
+            per_run = burn + keep * self.params["thin"]
+            total = per_run * len(seeds)
+            ctx.report_progress(0, total, "steps")
+            return [self._sample_run(model, s, lambda k, r=r: ctx.report_progress(r * per_run + k, total, "steps"))
+                    for r, s in enumerate(seeds)]
         from joblib import delayed
 
         return ctx.parallel()(delayed(self._sample_run)(model, s) for s in ctx.progress(seeds, what="runs"))
 
-    def _sample_run(self, model: PosteriorModel, seed: np.random.SeedSequence) -> ChainResult:
+    def _sample_run(self, model: PosteriorModel, seed: np.random.SeedSequence, step=None) -> ChainResult:
+        """One run of ``walkers`` walkers; ``step(k)`` (optional) is told after each ensemble step that ``k`` steps of
+        the run are done (the sampler's own iteration, as ``run_mcmc`` does it)."""
         p, walkers = self.params, self.walkers(model)
         rng = np.random.default_rng(seed)
         burn, keep = self._iterations(walkers)
@@ -103,9 +114,14 @@ class EmceeSampler(SamplerStage):
                                         vectorize=True,
                                         blobs_dtype=float)
         sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
-        state = sampler.run_mcmc(start, burn) if burn else start
+        state = start
+        for k, state in enumerate(sampler.sample(start, iterations=burn), 1):
+            if step is not None:
+                step(k)
         sampler.reset()
-        sampler.run_mcmc(state, keep, thin_by=p["thin"])
+        for k, _ in enumerate(sampler.sample(state, iterations=keep, thin_by=p["thin"]), 1):
+            if step is not None:
+                step(burn + k * p["thin"])
         return ChainResult(x=np.swapaxes(sampler.get_chain(), 0, 1), log_posterior=sampler.get_log_prob().T,
                            log_likelihood=sampler.get_blobs().T, acceptance=sampler.acceptance_fraction)
 
