@@ -24,8 +24,6 @@ from __future__ import annotations
 from spflow.core.errors import ParameterError
 
 from . import units
-from .physics.microemulsion_viscosity import microemulsion_viscosity
-from .physics.polymer_viscosity import zero_shear_viscosity
 
 __all__ = ["MAX_INJECTED_VISCOSITY_CP", "polymer_salinity_range", "peak_injected_viscosity",
            "check_injected_viscosity"]
@@ -52,6 +50,9 @@ def polymer_salinity_range(resolved: dict[str, float], schedule) -> tuple[float,
 def _slug_viscosity(p: dict[str, float], sslope: float, slug, csep: float) -> float:
     """Viscosity (cP) of the aqueous fluid of ``slug`` at polymer effective salinity ``csep``: Eq. 2.1, and Eq. 2.11
     with it as the solvent when the slug carries surfactant (the kernel's aqueous-phase viscosity)."""
+    from .physics.microemulsion_viscosity import microemulsion_viscosity  # numba: imported when a run is checked
+    from .physics.polymer_viscosity import zero_shear_viscosity
+
     cp = units.polymer_ppm_to_wt_percent(slug.polymer_ppm)
     mu = float(zero_shear_viscosity(p["VIS1"], cp, csep, p["AP1"], p["AP2"], p["AP3"], sslope, p["CSE1"]))
     c3 = units.surfactant_ppm_to_volume_fraction(slug.surfactant_ppm)
@@ -82,6 +83,8 @@ def check_injected_viscosity(resolved: dict[str, float], strengths: dict[str, fl
     mu, k, csep = peak_injected_viscosity(resolved, strengths, schedule)
     if mu <= MAX_INJECTED_VISCOSITY_CP:
         return
+    from .physics.polymer_viscosity import zero_shear_viscosity  # numba: imported only for the error message
+
     p = resolved
     slug = schedule.slugs[k]
     s = strengths["polymer_salinity"]
