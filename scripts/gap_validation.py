@@ -145,8 +145,8 @@ def _snr(base: BaseModel, truth: dict, data, variables) -> dict[str, float]:
                                              layout.variables)[0]
     if y0 is None or y1 is None:
         return {"snr": float("nan"), "snr_absorbed": float("nan")}
-    g = layout.whiten(layout.vector(y1) - layout.vector(y0))
     truth_series = layout.vector(y1)
+    g = layout.whiten(truth_series - layout.vector(y0))
     clean = Layout(tuple(dataclasses.replace(b, observed=truth_series[s])
                          for b, s in zip(layout.blocks, layout.slices())))
     absorbed = fit(predictor, clean, [truth["u"], base.default_unit()])

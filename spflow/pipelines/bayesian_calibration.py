@@ -136,7 +136,7 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
                               for e in bands["experiment"].values)
             lines.append(f"{round(100 * (bands.attrs['band_high'] - bands.attrs['band_low']))}% band coverage of "
                          f"{var}: {cover}")
-    seconds = {node: result.store.record(key).get("seconds") for node, key in result.keys.items()}
+    seconds = {node: result.seconds(node) for node in result.keys}
     lines.append("node seconds (when computed): " + ", ".join(f"{n} {s:.1f}" for n, s in seconds.items() if s))
     return lines
 

@@ -148,6 +148,6 @@ def report(result: spflow.RunResult, outdir: Path, truth: dict[str, float] | Non
     else:
         lines.append(f"every calibrated parameter is determined by the training data ({cal.attrs['training']}): no "
                      f"noise-consistent range covers {cal.attrs.get('undetermined_fraction', 0.9):.0%} of its prior")
-    seconds = {node: result.store.record(key).get("seconds") for node, key in result.keys.items()}
+    seconds = {node: result.seconds(node) for node in result.keys}
     lines.append("node seconds (when computed): " + ", ".join(f"{n} {s:.1f}" for n, s in seconds.items() if s))
     return lines
