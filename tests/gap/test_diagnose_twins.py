@@ -9,6 +9,7 @@ import pytest
 import xarray as xr
 
 from spflow.cli import main
+from spflow.core.cf_metadata import has_units_per_element
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext
 from spflow.plugins.gap.report import summary
@@ -95,8 +96,10 @@ def test_strong_capillary_pressure_twin_is_identified(tmp_path):
     assert all(c["slug"] in ("IWF", "HTDS", "SP", "P", "EWF") and c["pvalue"] < 0.01 for c in result["change_points"])
     # the final model's held-out predictive intervals cover at least as well as the base model's
     assert result["coverage"]["heldout_final"] >= result["coverage"]["heldout_base"]
-    # units in attrs everywhere
-    assert all("units" in report[v].attrs for v in report.data_vars if report[v].dtype.kind == "f")
+    # units in attrs everywhere (theta: units per parameter, in param_units)
+    assert all("units" in report[v].attrs or has_units_per_element(report, v) for v in report.data_vars
+               if report[v].dtype.kind == "f")
+    assert report["theta"].attrs["units_variable"] == "param_units"
     assert np.isfinite(report["fingerprint_cos"].values).all()
 
 

@@ -23,7 +23,7 @@ from spflow.core.schema import DatasetSchema, Variable
 
 from .outputs import OutputIndex
 
-__all__ = ["Surrogate", "SURROGATE", "load_surrogate", "surrogate_kinds", "with_parameter_units"]
+__all__ = ["Surrogate", "SURROGATE", "STORED_SURROGATE", "load_surrogate", "surrogate_kinds", "with_parameter_units"]
 
 #: Variables of a stored surrogate that hold parameter values (units per parameter).
 PARAMETER_VALUED = ("lower", "upper", "train_x")
@@ -40,6 +40,19 @@ SURROGATE = DatasetSchema(
     },
     attrs=("surrogate",),
     doc="a fitted surrogate (see attrs['surrogate'] for its kind)",
+)
+
+#: A surrogate as a stage stores it and as the stages reading one from a pipeline take it: :data:`SURROGATE` with the
+#: box in the units of the parameter space, units per element ``param_unit`` (:func:`with_parameter_units`). One
+#: built in memory (``Surrogate.to_dataset()``, what :func:`load_surrogate` takes) need not carry them.
+STORED_SURROGATE = DatasetSchema(
+    dims=SURROGATE.dims,
+    variables=SURROGATE.variables | {
+        "lower": Variable(("param",), units_variable="param_unit", long_name="lower end of the training box"),
+        "upper": Variable(("param",), units_variable="param_unit", long_name="upper end of the training box"),
+        "param_unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each input parameter")},
+    attrs=SURROGATE.attrs,
+    doc="a fitted surrogate with the units of its inputs (see attrs['surrogate'] for its kind)",
 )
 
 class Surrogate(ABC):
