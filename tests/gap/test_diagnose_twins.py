@@ -52,11 +52,14 @@ def test_null_twin_is_not_flagged(tmp_path, capsys):
                  "--out", str(out)]) == 0
     result = json.loads((out / "summary.json").read_text())
     assert result["verdict"] == "none" and result["effects"] == [] and result["gap_cells"] == []
-    assert "verdict: none" in capsys.readouterr().out
+    printed = capsys.readouterr().out.splitlines()  # the verdict table as text: title, header, one row
+    verdict = printed.index("Verdict")
+    assert printed[verdict + 1].split()[0] == "verdict" and printed[verdict + 2].split()[0] == "none"
     for name in ("gap_heatmap", "fingerprint_angles", "candidates", "predictions", "pointwise_scores"):
         assert (out / f"{name}.png").stat().st_size > 10_000
     page = (out / "report.html").read_text()  # the HTML report: the verdict, the inputs, every figure inlined
-    assert "verdict: none" in page and cal in page and page.count("data:image/png;base64,") == 5
+    assert "<caption>Verdict</caption>" in page and "<tr><td>none</td>" in page and cal in page
+    assert page.count("data:image/png;base64,") == 5
     with xr.open_dataset(out / "gap_report.nc") as ds:
         assert summary(ds.load()) == result  # the summary is a function of the saved report alone
     # a noise-only misfit: the calibration chi2 is consistent with its degrees of freedom
