@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
-from joblib import delayed
 
 from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
@@ -246,6 +245,8 @@ class SlugDesign(Stage):
     def _knee_runs(self, ctx: StageContext, draws: Realisations, x: np.ndarray, parallel) -> xr.Dataset:
         """The knee design over ``knee_draws`` realisations (posterior draw and price path each): Figs. 4.9-4.10.
         Without a posterior the simulation is deterministic and is run once."""
+        from joblib import delayed  # loads when a design runs, not when the stage is listed
+
         problem = draws.problem
         n = self.params["knee_draws"] if draws.theta is not None else 1
         xi = [draws.draw(s) for s in np.random.SeedSequence([self.params["seed"], 1]).spawn(n)]
