@@ -10,9 +10,13 @@ from numpy.polynomial import hermite_e
 from scipy import integrate, special, stats
 
 from spflow.core.errors import ParameterError
+from spflow.core.stage import StageContext
+from spflow.plugins.forward.stage import RESPONSE_UNITS
+from spflow.plugins.surrogates.adaptive_design import AdaptivePCE
 from spflow.plugins.surrogates.basis import design_matrix, multi_indices
-from spflow.plugins.surrogates.contract import UNIFORM_ASSUMED, load_surrogate
-from spflow.plugins.surrogates.input_marginals import marginal_from_record
+from spflow.plugins.surrogates.contract import UNIFORM_ASSUMED, input_box, load_surrogate
+from spflow.plugins.surrogates.input_marginals import marginal_from_record, marginal_variables
+from spflow.plugins.surrogates.pce_stage import PCEStage
 from spflow.plugins.surrogates.orthonormal_polynomials import HERMITE, LEGENDRE, jacobi, truncated_hermite
 from spflow.plugins.surrogates.regression import ols
 from spflow.surrogates import GP, PCE, PCK, Beta, LogNormal, Normal, TruncatedNormal, Uniform
@@ -333,3 +337,71 @@ def test_bad_estimator_inputs():
         model.predict([[-0.1, 0.0]])
     with pytest.raises(ParameterError, match=r"surrogate input: point 0 has x1 = -0.1, outside the support \[0, 1\]"):
         model.model_.predict(np.array([[-0.1, 0.0]]))
+
+
+# -- a parameter space that records marginals (the priors stage's truncated normals) -----------------------------------
+SPACE_NAMES = ["AD31", "HBNC71"]
+SPACE_INPUTS = [TruncatedNormal(1.0, 0.4, 0.2, 2.0), Beta(2.0, 3.0, 0.01, 0.02)]
+
+
+def _space(inputs=SPACE_INPUTS):
+    lower, upper = input_box(inputs)
+    return xr.Dataset({"lower": ("param", lower, {"units_variable": "unit"}),
+                       "upper": ("param", upper, {"units_variable": "unit"}),
+                       "default": ("param", (lower + upper) / 2, {"units_variable": "unit"}),
+                       "unit": ("param", ["1", "1"]), **marginal_variables(inputs)},
+                      coords={"param": SPACE_NAMES})
+
+
+def _stage_data(x):
+    """A design on the space and dp responses pv x1 + (100 x2)² at pv = 0.5, 1 (one experiment)."""
+    design = xr.Dataset({"values": (("sample", "param"), x)}, coords={"sample": np.arange(len(x)),
+                                                                      "param": SPACE_NAMES})
+    pv = np.array([0.5, 1.0])
+    dp = pv[None, :] * x[:, :1] + (100 * x[:, 1:]) ** 2
+    responses = xr.Dataset({"dp": (("sample", "experiment", "pv"), dp[:, None, :], {"units": RESPONSE_UNITS["dp"]}),
+                            "total_pv": ("experiment", [1.0], {"units": "1"})},
+                           coords={"sample": np.arange(len(x)), "experiment": ["BCF1"], "pv": pv})
+    return design, responses, pv
+
+
+def test_pce_stage_fits_under_the_space_marginals():
+    """E[dp] = pv E x1 + 10⁴ E x2², Var = pv² v1 + 10⁸ Var(x2²) with the truncated normal's moments from scipy and
+    the beta's from its raw moments: exact, as the responses are polynomial."""
+    x = _draw(SPACE_INPUTS, 40, seed=11)
+    design, responses, pv = _stage_data(x)
+    ds = PCEStage(variables=["dp"], experiments=["BCF1"]).run(StageContext(node="t", verbose=False),
+                                                               space=_space(), design=design, responses=responses)
+    assert list(ds["distribution"].values) == ["truncated_normal", "beta"]
+    model = load_surrogate(ds)
+    assert model.inputs == SPACE_INPUTS
+    t = stats.truncnorm((0.2 - 1.0) / 0.4, (2.0 - 1.0) / 0.4, loc=1.0, scale=0.4)
+    b = stats.beta(2.0, 3.0, loc=0.01, scale=0.01)
+    mean, var = model.moments()
+    np.testing.assert_allclose(mean, pv * t.mean() + 1e4 * b.moment(2), rtol=1e-10)
+    np.testing.assert_allclose(var, pv**2 * t.var() + 1e8 * (b.moment(4) - b.moment(2) ** 2), rtol=1e-8)
+
+
+def test_space_marginals_must_live_on_the_range():
+    space = _space().assign(lower=("param", [0.0, 0.01], {"units_variable": "unit"}))
+    x = _draw(SPACE_INPUTS, 10, seed=12)
+    design, responses, _ = _stage_data(x)
+    with pytest.raises(ParameterError, match=r"parameter 'AD31' of the space has the distribution "
+                                             r"TruncatedNormal\(.*\) with support \[0.2, 2\], not the space's range "
+                                             r"\[0, 2\]"):
+        PCEStage(variables=["dp"], experiments=["BCF1"]).run(StageContext(node="t", verbose=False), space=space,
+                                                             design=design, responses=responses)
+    bad = _space().assign(distribution=("param", ["truncated_normal", "gamma"]))
+    with pytest.raises(ParameterError, match="the parameter space, parameter 'HBNC71': input distribution 'gamma'"):
+        PCEStage(variables=["dp"], experiments=["BCF1"]).run(StageContext(node="t", verbose=False), space=bad,
+                                                             design=design, responses=responses)
+
+
+def test_adaptive_pce_draws_its_hypercube_through_the_marginals():
+    """Each column of a batch, mapped through its marginal's cdf, has one value in each of the n strata of [0, 1]."""
+    n = 16
+    batch = AdaptivePCE(n_initial=n)._batch(_space(), n, 0)
+    values = batch["values"].transpose("sample", "param").values
+    for j, marginal in enumerate(SPACE_INPUTS):
+        strata = np.floor(marginal.cdf(values[:, j]) * n).astype(int)
+        assert sorted(strata) == list(range(n))

@@ -24,7 +24,8 @@ from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.plugins import get_registry
 from spflow.core.schema import DatasetSchema, Variable
 
-from .input_marginals import Marginal, Uniform, check_support, marginal_from_record
+from .input_marginals import (DISTRIBUTION_LONG_NAME, PARAMETERS_LONG_NAME, Marginal, Uniform, check_support,
+                              marginal_variables, marginals_from_dataset)
 from .orthonormal_polynomials import PolynomialFamily
 from .outputs import OutputIndex
 
@@ -41,13 +42,8 @@ SURROGATE = DatasetSchema(
         # ±inf where a marginal is unbounded (normal, lognormal); a NaN is refused by the kinds' constructors
         "lower": Variable(("param",), units=None, allow_nan=True, long_name="lower end of the input's support"),
         "upper": Variable(("param",), units=None, allow_nan=True, long_name="upper end of the input's support"),
-        "distribution": Variable(("param",), kind="U", required=False,
-                                 long_name="marginal law of the input (uniform, normal, lognormal, truncated_normal, "
-                                           "beta)"),
-        "distribution_parameters": Variable(("param",), kind="U", required=False,
-                                            long_name="JSON object of the marginal's parameters: mean, std, lower, "
-                                                      "upper in the input's unit (param_unit), alpha, beta "
-                                                      "dimensionless, lognormal mu, sigma of ln(x / param_unit)"),
+        "distribution": Variable(("param",), kind="U", required=False, long_name=DISTRIBUTION_LONG_NAME),
+        "distribution_parameters": Variable(("param",), kind="U", required=False, long_name=PARAMETERS_LONG_NAME),
         "output_variable": Variable(("output",), kind="U", long_name="variable of each output column"),
         "output_pv": Variable(("output",), units="1", allow_nan=True,
                               long_name="injected pore volumes of each output column"),
@@ -155,14 +151,10 @@ class Surrogate(ABC):
         """Rebuild from :meth:`to_dataset`'s output."""
 
     def _dataset(self, variables: dict, coords: dict | None = None, attrs: dict | None = None) -> xr.Dataset:
-        family, parameters = zip(*(m.record() for m in self.inputs))
-        named = {name: {"long_name": SURROGATE.variables[name].long_name}
-                 for name in ("lower", "upper", "distribution", "distribution_parameters")}
         ds = xr.Dataset(
-            {"lower": ("param", self.lower, named["lower"]), "upper": ("param", self.upper, named["upper"]),
-             "distribution": ("param", np.array(family, dtype=str), named["distribution"]),
-             "distribution_parameters": ("param", np.array(parameters, dtype=str), named["distribution_parameters"]),
-             **variables},
+            {"lower": ("param", self.lower, {"long_name": SURROGATE.variables["lower"].long_name}),
+             "upper": ("param", self.upper, {"long_name": SURROGATE.variables["upper"].long_name}),
+             **marginal_variables(self.inputs), **variables},
             coords={"param": ("param", self.names, {"long_name": "input parameter (design column)"}),
                     **self.outputs.coords(), **(coords or {})},
         )
@@ -180,15 +172,8 @@ class Surrogate(ABC):
         """The ``inputs`` (marginals) and ``input_note`` constructor arguments read back from a stored Dataset: a
         Dataset without ``distribution`` (stored before the marginals were recorded, or by a kind that keeps none) is
         uniform on its box, which ``input_note`` says."""
-        if "distribution" not in ds.variables:
-            return {"inputs": None, "input_note": UNIFORM_ASSUMED}
-        if "distribution_parameters" not in ds.variables:
-            raise ParameterError("stored surrogate: variable 'distribution' needs 'distribution_parameters' (JSON "
-                                 "object of each input's parameters) along 'param'")
-        names = [str(n) for n in ds["param"].values]
-        return {"inputs": [marginal_from_record(str(f), str(p), where=f"stored surrogate parameter {n!r}")
-                           for n, f, p in zip(names, ds["distribution"].values, ds["distribution_parameters"].values)],
-                "input_note": ""}
+        inputs = marginals_from_dataset(ds, "stored surrogate")
+        return {"inputs": inputs, "input_note": UNIFORM_ASSUMED if inputs is None else ""}
 
 
 def resolve_inputs(names: list[str], lower: np.ndarray, upper: np.ndarray, inputs, what: str) -> list[Marginal]:

@@ -43,7 +43,13 @@ from spflow.core.errors import ParameterError
 from .orthonormal_polynomials import HERMITE, LEGENDRE, PolynomialFamily, jacobi, truncated_hermite
 
 __all__ = ["Marginal", "Uniform", "Normal", "LogNormal", "TruncatedNormal", "Beta", "MARGINALS",
-           "marginal_from_record", "check_support"]
+           "marginal_from_record", "check_support", "marginal_variables", "marginals_from_dataset",
+           "DISTRIBUTION_LONG_NAME", "PARAMETERS_LONG_NAME"]
+
+#: CF long names of the two string variables (along ``param``) that record the marginals in a Dataset.
+DISTRIBUTION_LONG_NAME = "marginal law of the input (uniform, normal, lognormal, truncated_normal, beta)"
+PARAMETERS_LONG_NAME = ("JSON object of the marginal's parameters: mean, std, lower, upper in the input's unit, alpha, "
+                        "beta dimensionless, lognormal mu, sigma of ln(x / unit)")
 
 
 def _number(owner: str, field: str, value) -> float:
@@ -301,6 +307,29 @@ def marginal_from_record(family: str, parameters: str | dict, where: str = "surr
     if not isinstance(values, dict) or sorted(values) != sorted(cls.fields):
         raise ParameterError(f"{where}: a {family} input needs the parameters {list(cls.fields)}, got {values!r}")
     return cls(**values)
+
+
+def marginal_variables(inputs) -> dict:
+    """The data variables ``distribution`` and ``distribution_parameters`` (dim ``param``, strings) recording the
+    marginals ``inputs`` in a Dataset (a stored surrogate, a parameter space); :func:`marginals_from_dataset` reads
+    them back."""
+    family, parameters = zip(*(m.record() for m in inputs))
+    return {"distribution": ("param", np.array(family, dtype=str), {"long_name": DISTRIBUTION_LONG_NAME}),
+            "distribution_parameters": ("param", np.array(parameters, dtype=str),
+                                        {"long_name": PARAMETERS_LONG_NAME})}
+
+
+def marginals_from_dataset(ds, where: str) -> list[Marginal] | None:
+    """The marginals recorded in ``ds`` by :func:`marginal_variables`, in the order of ``ds["param"]``; None when
+    ``ds`` records none (no ``distribution``). ``where`` names the Dataset in the errors."""
+    if "distribution" not in ds.variables:
+        return None
+    if "distribution_parameters" not in ds.variables:
+        raise ParameterError(f"{where}: variable 'distribution' needs 'distribution_parameters' (a JSON object of each "
+                             f"input's parameters) along 'param'")
+    names = [str(n) for n in ds["param"].values]
+    return [marginal_from_record(str(f), str(p), where=f"{where}, parameter {n!r}")
+            for n, f, p in zip(names, ds["distribution"].values, ds["distribution_parameters"].values)]
 
 
 def check_support(inputs, names: list[str], x: np.ndarray, what: str) -> None:
