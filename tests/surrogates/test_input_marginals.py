@@ -8,6 +8,7 @@ import pytest
 import xarray as xr
 from numpy.polynomial import hermite_e
 from scipy import integrate, special, stats
+from sklearn.base import clone
 
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext
@@ -84,10 +85,11 @@ def test_families_equal_the_normalised_classical_polynomials():
 
 
 def test_jacobi_zero_zero_is_legendre():
-    alpha, sqrt_beta = jacobi(0, 0).recurrence(6)
     n = np.arange(1, 7)
-    np.testing.assert_allclose(alpha, 0.0, atol=1e-15)
-    np.testing.assert_allclose(sqrt_beta[1:], n / np.sqrt(4 * n**2 - 1), rtol=1e-14)
+    for family in (jacobi(0, 0), LEGENDRE):
+        alpha, sqrt_beta = family.recurrence(6)
+        np.testing.assert_allclose(alpha, 0.0, atol=1e-15)
+        np.testing.assert_allclose(sqrt_beta[1:], n / np.sqrt(4 * n**2 - 1), rtol=1e-14)
     z = np.linspace(-1, 1, 11)
     np.testing.assert_allclose(jacobi(0, 0).evaluate(z, 8), LEGENDRE.evaluate(z, 8), rtol=1e-12, atol=1e-13)
 
@@ -259,6 +261,15 @@ def test_uniform_inputs_equal_bounds_bit_for_bit():
     by_inputs = PCE(inputs=[Uniform(*b) for b in box]).fit(x, y).model_
     np.testing.assert_array_equal(by_inputs.indices, by_bounds.indices)
     np.testing.assert_array_equal(by_inputs.coefficients, by_bounds.coefficients)
+
+
+def test_estimator_with_inputs_clones_and_keeps_them():
+    inputs = [Normal(0.0, 1.0), Beta(2.0, 2.0)]
+    model = PCE(inputs=inputs, degree_max=3)
+    copy = clone(model)
+    assert copy.get_params()["inputs"] == inputs and copy.get_params()["bounds"] is None
+    x = _draw(inputs, 30, seed=13)
+    np.testing.assert_array_equal(copy.fit(x, x[:, 0]).predict(x), model.fit(x, x[:, 0]).predict(x))
 
 
 def test_kriging_in_the_reference_space():

@@ -147,11 +147,11 @@ class Marginal(ABC):
         return self.ppf(np.random.default_rng(rng).random(n))
 
 
-class Uniform(Marginal):
-    family, fields, polynomials = "uniform", ("lower", "upper"), LEGENDRE
+class _OnInterval(Marginal):
+    """A law on [lower, upper] whose reference variable is its affine image on [-1, 1] (Uniform, Beta)."""
 
-    def __init__(self, lower: float, upper: float):
-        self.lower, self.upper = _interval("Uniform", lower, upper)
+    lower: float
+    upper: float
 
     @property
     def support(self):
@@ -163,13 +163,33 @@ class Uniform(Marginal):
     def from_reference(self, z):
         return self.lower + 0.5 * (np.asarray(z) + 1.0) * (self.upper - self.lower)
 
+
+class _Standardised(Marginal):
+    """A (possibly truncated) normal law whose reference variable is (x − mean)/std (Normal, TruncatedNormal)."""
+
+    mean: float
+    std: float
+
+    def to_reference(self, x):
+        return (x - self.mean) / self.std
+
+    def from_reference(self, z):
+        return self.mean + self.std * np.asarray(z)
+
+
+class Uniform(_OnInterval):
+    family, fields, polynomials = "uniform", ("lower", "upper"), LEGENDRE
+
+    def __init__(self, lower: float, upper: float):
+        self.lower, self.upper = _interval("Uniform", lower, upper)
+
     def frozen(self):
         from scipy import stats
 
         return stats.uniform(self.lower, self.upper - self.lower)
 
 
-class Normal(Marginal):
+class Normal(_Standardised):
     family, fields, polynomials = "normal", ("mean", "std"), HERMITE
 
     def __init__(self, mean: float, std: float):
@@ -178,12 +198,6 @@ class Normal(Marginal):
     @property
     def support(self):
         return -np.inf, np.inf
-
-    def to_reference(self, x):
-        return (x - self.mean) / self.std
-
-    def from_reference(self, z):
-        return self.mean + self.std * np.asarray(z)
 
     def frozen(self):
         from scipy import stats
@@ -229,7 +243,7 @@ class LogNormal(Marginal):
         return stats.lognorm(self.sigma, scale=np.exp(self.mu))
 
 
-class TruncatedNormal(Marginal):
+class TruncatedNormal(_Standardised):
     """N(mean, std²) truncated to [lower, upper]; ``mean``/``std`` are the parent normal's."""
 
     family, fields = "truncated_normal", ("mean", "std", "lower", "upper")
@@ -249,12 +263,6 @@ class TruncatedNormal(Marginal):
     def support(self):
         return self.lower, self.upper
 
-    def to_reference(self, x):
-        return (x - self.mean) / self.std
-
-    def from_reference(self, z):
-        return self.mean + self.std * np.asarray(z)
-
     def frozen(self):
         from scipy import stats
 
@@ -262,7 +270,7 @@ class TruncatedNormal(Marginal):
                                loc=self.mean, scale=self.std)
 
 
-class Beta(Marginal):
+class Beta(_OnInterval):
     """Beta(alpha, beta) stretched onto [lower, upper]: density ∝ (x − lower)^(alpha−1) (upper − x)^(beta−1)."""
 
     family, fields = "beta", ("alpha", "beta", "lower", "upper")
@@ -272,16 +280,6 @@ class Beta(Marginal):
         self.lower, self.upper = _interval("Beta", lower, upper)
         # ξ = 2t − 1 with t ~ Beta(alpha, beta): density ∝ (1 + ξ)^(alpha−1) (1 − ξ)^(beta−1)
         self.polynomials = jacobi(self.beta - 1.0, self.alpha - 1.0)
-
-    @property
-    def support(self):
-        return self.lower, self.upper
-
-    def to_reference(self, x):
-        return 2.0 * (x - self.lower) / (self.upper - self.lower) - 1.0
-
-    def from_reference(self, z):
-        return self.lower + 0.5 * (np.asarray(z) + 1.0) * (self.upper - self.lower)
 
     def frozen(self):
         from scipy import stats

@@ -74,16 +74,15 @@ class PolynomialFamily:
 
     def recurrence(self, degree: int) -> tuple[np.ndarray, np.ndarray]:
         """(α_n, sqrt(β_n)) for n = 0..degree of the orthonormal recurrence (module docstring); sqrt(β_0) = 1 (a
-        probability measure). Legendre's are n² / (4n² − 1), though :func:`univariate_table` uses Bonnet's form."""
+        probability measure). Legendre's are Jacobi's at a = b = 0 (β_n = n² / (4n² − 1)), though
+        :func:`univariate_table` evaluates Legendre with Bonnet's form."""
         if self.name == "truncated_hermite":
             return _stieltjes(self.a, self.b, degree)
         n = np.arange(degree + 1, dtype=float)
         alpha, beta = np.zeros(degree + 1), np.ones(degree + 1)
-        if self.name == "legendre":
-            beta[1:] = n[1:] ** 2 / (4.0 * n[1:] ** 2 - 1.0)
-        elif self.name == "hermite":
+        if self.name == "hermite":
             beta[1:] = n[1:]
-        else:
+        else:  # Jacobi; Legendre has a = b = 0
             a, b = self.a, self.b
             s = 2.0 * n + a + b
             alpha[0] = (b - a) / (a + b + 2.0)
