@@ -4,6 +4,8 @@
     >>> model = PCE(bounds=[(100, 200), (0.01, 0.02)]).fit(X, y)   # X (n, 2) in physical units, y (n,) or (n, m)
     >>> mean, std = model.predict(X_new, return_std=True)          # shaped like y
     >>> model.sobol_indices().total, model.loo_error_
+    >>> from spflow.surrogates import Beta, LogNormal, Normal
+    >>> model = PCE(inputs=[Normal(1.0, 0.2), Beta(2, 3, 0.0, 1.0), LogNormal(0.0, 0.25)]).fit(X, y)  # X from them
 
 Each estimator takes its options in the constructor (scikit-learn's convention: ``get_params``/``set_params``/
 ``clone`` work, ``score`` is R²), learns from ``fit(X, y)`` and keeps the fitted surrogate of the pipeline contract
@@ -12,13 +14,19 @@ as ``model_`` (:class:`~spflow.plugins.surrogates.contract.Surrogate`: ``to_data
 §3.5), :class:`~spflow.plugins.surrogates.gp_model.GP` and :class:`~spflow.plugins.surrogates.pck_model.PCK` (§3.8)
 -- with the same defaults as those functions and the stages (docs/surrogates.md, "Use as a library").
 
-The inputs are uniform on the box ``bounds`` (one (lower, upper) pair per input, physical units); only uniform inputs
-are supported. What the API assumes about the data is recorded on ``model_``: input names ``x1..xd`` unless
-``names`` is given; every output column labelled ``y`` with unit ``"1"`` (the API does not know y's unit), so
-``share="variable"`` makes all columns of a vector ``y`` share one set of Kriging length scales.
+The inputs are independent, and given by exactly one of ``bounds`` (uniform on the box, one (lower, upper) pair per
+input, physical units) or ``inputs`` (one marginal per input: :class:`Uniform`, :class:`Normal`, :class:`LogNormal`,
+:class:`TruncatedNormal`, :class:`Beta`, :mod:`~spflow.plugins.surrogates.input_marginals`). With ``inputs`` the PCE
+is built on the orthonormal family of each marginal through the isoprobabilistic transform (docs/surrogates.md,
+"Input distributions"), so its moments and Sobol indices are those under these marginals; ``X`` should be drawn from
+them (``marginal.sample(n, rng)``). What the API assumes about the data is recorded on ``model_``: input names
+``x1..xd`` unless ``names`` is given; the marginals (``model_.inputs``, stored by ``to_dataset()``); every output
+column labelled ``y`` with unit ``"1"`` (the API does not know y's unit), so ``share="variable"`` makes all columns
+of a vector ``y`` share one set of Kriging length scales.
 
-Bad input -- a wrong shape, a NaN, a point outside ``bounds`` -- raises :class:`~spflow.core.errors.ParameterError`
-naming the argument and the allowed range, before any fitting.
+Bad input -- a wrong shape, a NaN, a point outside ``bounds`` or outside the support of a bounded marginal, both or
+neither of ``bounds`` and ``inputs`` -- raises :class:`~spflow.core.errors.ParameterError` naming the argument and
+the allowed range, before any fitting.
 """
 
 from __future__ import annotations
@@ -29,12 +37,14 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from spflow.core.errors import ParameterError
-from spflow.plugins.surrogates.contract import Surrogate
+from spflow.plugins.surrogates.contract import Surrogate, input_box
 from spflow.plugins.surrogates.degree_adaptive import DEGREE_MAX, MAX_TERMS_RATIO
 from spflow.plugins.surrogates.kriging_surrogate import RESTARTS
+from spflow.plugins.surrogates.input_marginals import Beta, LogNormal, Marginal, Normal, TruncatedNormal, Uniform
 from spflow.plugins.surrogates.outputs import OutputIndex
 
-__all__ = ["PCE", "GP", "PCK", "SobolIndices", "SurrogateRegressor"]
+__all__ = ["PCE", "GP", "PCK", "SobolIndices", "SurrogateRegressor", "Uniform", "Normal", "LogNormal",
+           "TruncatedNormal", "Beta"]
 
 
 class SobolIndices(NamedTuple):
@@ -48,8 +58,26 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
     """Common part of the estimators: input checks, ``fit``, ``predict``; subclasses build ``model_``."""
 
     # -- checks (before any work) -----------------------------------------------------------------------------------
+    def _marginals(self) -> list[Marginal] | None:
+        """``inputs`` checked (None when the inputs are given by ``bounds``); exactly one of the two must be given."""
+        name = type(self).__name__
+        if (self.bounds is None) == (self.inputs is None):
+            raise ParameterError(f"{name}: give exactly one of bounds (uniform inputs, one (lower, upper) pair per "
+                                 f"input) and inputs (one marginal distribution per input: Uniform, Normal, LogNormal,"
+                                 f" TruncatedNormal, Beta), got {'both' if self.inputs is not None else 'neither'}")
+        if self.inputs is None:
+            return None
+        inputs = list(self.inputs) if isinstance(self.inputs, (list, tuple)) else None
+        if not inputs or not all(isinstance(m, Marginal) for m in inputs):
+            raise ParameterError(f"{name}: inputs must be a non-empty list of marginal distributions (Uniform, Normal, "
+                                 f"LogNormal, TruncatedNormal, Beta from spflow.surrogates), got {self.inputs!r}")
+        return inputs
+
     def _box(self) -> tuple[np.ndarray, np.ndarray]:
-        """``bounds`` as (lower, upper) arrays of length d."""
+        """(lower, upper) arrays of length d: ``bounds``, or the supports of ``inputs`` (±inf where unbounded)."""
+        inputs = self._marginals()
+        if inputs is not None:
+            return input_box(inputs)
         name = type(self).__name__
         try:
             bounds = np.asarray(self.bounds, dtype=float)
@@ -72,11 +100,13 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
         names = [str(n) for n in self.names]
         if len(names) != d or len(set(names)) != d:
             raise ParameterError(f"{type(self).__name__}: names must be {d} distinct input names (one per row of "
-                                 f"bounds), got {list(self.names)!r}")
+                                 f"bounds or entry of inputs), got {list(self.names)!r}")
         return names
 
-    def _points(self, argument: str, X, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """``X`` as a float (n, d) array inside the box (clipped onto it within round-off)."""
+    def _points(self, argument: str, X, lower: np.ndarray, upper: np.ndarray,
+                inputs: list[Marginal] | None = None) -> np.ndarray:
+        """``X`` as a float (n, d) array inside the box (clipped onto it within round-off), or, given ``inputs``,
+        inside their supports."""
         name, d = type(self).__name__, lower.size
         try:
             X = np.asarray(X, dtype=float)
@@ -90,6 +120,14 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
             i, j = map(int, bad[0])
             raise ParameterError(f"{name}: {argument}[{i}, {j}] = {X[i, j]}; {argument} must be finite, column {j} "
                                  f"in bounds[{j}] = [{lower[j]:g}, {upper[j]:g}]")
+        if inputs is not None:
+            for j, marginal in enumerate(inputs):
+                bad = np.flatnonzero(~marginal.contains(X[:, j]))
+                if bad.size:
+                    i = int(bad[0])
+                    raise ParameterError(f"{name}: {argument}[{i}, {j}] = {X[i, j]:g} lies outside the support "
+                                         f"{marginal.support_text()} of inputs[{j}] = {marginal!r}")
+            return np.clip(X, lower, upper)
         slack = 1e-9 * (upper - lower)
         bad = np.argwhere((X < lower - slack) | (X > upper + slack))
         if bad.size:
@@ -100,10 +138,12 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
 
     # -- fitting and prediction ---------------------------------------------------------------------------------------
     def fit(self, X, y) -> SurrogateRegressor:
-        """Fit on ``X`` (n, d) in physical units inside ``bounds`` and ``y`` (n,) or (n, m); returns self."""
+        """Fit on ``X`` (n, d) in physical units inside ``bounds`` (or drawn from ``inputs``) and ``y`` (n,) or (n, m);
+        returns self."""
         lower, upper = self._box()
+        inputs = self._marginals()
         names = self._input_names(lower.size)
-        X = self._points("X", X, lower, upper)
+        X = self._points("X", X, lower, upper, inputs)
         name = type(self).__name__
         try:
             y = np.asarray(y, dtype=float)
@@ -117,14 +157,14 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
             where = ", ".join(map(str, bad[0]))
             raise ParameterError(f"{name}: y[{where}] = {y[tuple(bad[0])]}; y must be finite")
         columns = y.reshape(X.shape[0], -1)
-        self.model_ = self._fit_model(names, lower, upper, OutputIndex.of_array(columns.shape[1]), X, columns)
+        self.model_ = self._fit_model(names, lower, upper, OutputIndex.of_array(columns.shape[1]), X, columns, inputs)
         self.scalar_output_ = y.ndim == 1
         self.n_features_in_ = lower.size
         return self
 
     def _fit_model(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
-                   X: np.ndarray, y: np.ndarray) -> Surrogate:
-        """The fitted contract surrogate (subclasses)."""
+                   X: np.ndarray, y: np.ndarray, inputs: list[Marginal] | None) -> Surrogate:
+        """The fitted contract surrogate (subclasses); ``inputs`` None means uniform on the box."""
         raise NotImplementedError
 
     def _parallel(self):
@@ -153,7 +193,7 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
         """The surrogate's mean at ``X`` (n, d) inside ``bounds``, shaped like the training ``y``; with
         ``return_std=True`` also its standard deviation (same shape). Only then is the variance computed."""
         model = self._fitted()
-        X = self._points("X", X, model.lower, model.upper)
+        X = self._points("X", X, model.lower, model.upper, None if self.inputs is None else model.inputs)
         if not return_std:
             return self._shaped(model.predict_mean(X))
         mean, variance = model.predict(X)
@@ -170,17 +210,19 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
 
 
 class _TrendSobol:
-    """``sobol_indices`` read off the orthonormal-Legendre coefficients of ``model_`` (its ``sobol()``)."""
+    """``sobol_indices`` read off the orthonormal-basis coefficients of ``model_`` (its ``sobol()``)."""
 
     def sobol_indices(self) -> SobolIndices:
-        """First and total Sobol indices under the uniform inputs: (d,) for a scalar y, (m, d) otherwise."""
+        """First and total Sobol indices under the input marginals (uniform on ``bounds``, or ``inputs``): (d,) for a
+        scalar y, (m, d) otherwise."""
         ds = self._fitted().sobol()
         first, total = ds["S1"].values, ds["ST"].values  # (m, d)
         return SobolIndices(first[0], total[0]) if self.scalar_output_ else SobolIndices(first, total)
 
 
 class PCE(_TrendSobol, SurrogateRegressor):
-    """Degree-adaptive polynomial chaos expansion (thesis §3.5, Algorithm 2) on the box ``bounds``.
+    """Degree-adaptive polynomial chaos expansion (thesis §3.5, Algorithm 2) on the box ``bounds`` or under the
+    marginals ``inputs`` (exactly one of them).
 
     Options as :func:`spflow.plugins.surrogates.degree_adaptive.fit_pce` and the ``pce`` stage: ``degree_max``
     (largest total degree tried), ``q`` (hyperbolic truncation), ``solver`` (``"ols"`` or sparse ``"lars"``),
@@ -191,19 +233,20 @@ class PCE(_TrendSobol, SurrogateRegressor):
     ``predict(X, return_std=True)``'s std is the corrected LOO estimate of the proxy error, sqrt(ε*_LOO · Var̂(y)),
     constant in X (a PCE has no pointwise error model). ``loo_error_`` is that corrected LOO ε*_LOO (Blatman & Sudret
     2011), the estimate of the relative validation error. ``sobol_indices()``: first and total indices from the
-    coefficients (Sudret 2008).
+    coefficients (Sudret 2008); ``model_.moments()`` the mean and variance.
     """
 
-    def __init__(self, bounds, *, names=None, degree_max: int = DEGREE_MAX, q: float = 0.9, solver: str = "ols",
-                 target_loo: float = 0.0, max_terms_ratio: float = MAX_TERMS_RATIO, n_jobs: int = 1):
-        self.bounds, self.names = bounds, names
+    def __init__(self, bounds=None, *, inputs=None, names=None, degree_max: int = DEGREE_MAX, q: float = 0.9,
+                 solver: str = "ols", target_loo: float = 0.0, max_terms_ratio: float = MAX_TERMS_RATIO,
+                 n_jobs: int = 1):
+        self.bounds, self.inputs, self.names = bounds, inputs, names
         self.degree_max, self.q, self.solver, self.target_loo = degree_max, q, solver, target_loo
         self.max_terms_ratio, self.n_jobs = max_terms_ratio, n_jobs
 
-    def _fit_model(self, names, lower, upper, outputs, X, y) -> Surrogate:
+    def _fit_model(self, names, lower, upper, outputs, X, y, inputs) -> Surrogate:
         from spflow.plugins.surrogates.pce_model import PCE as PCEModel
 
-        return PCEModel.fit(names, lower, upper, outputs, X, y, degree_max=self.degree_max, q=self.q,
+        return PCEModel.fit(names, lower, upper, outputs, X, y, inputs=inputs, degree_max=self.degree_max, q=self.q,
                             solver=self.solver, target_loo=self.target_loo, max_terms_ratio=self.max_terms_ratio,
                             parallel=self._parallel())
 
@@ -223,7 +266,9 @@ class _Kriging(SurrogateRegressor):
 
 
 class GP(_Kriging):
-    """Gaussian process (ordinary Kriging, thesis §3.8 with a constant trend) on the box ``bounds``.
+    """Gaussian process (ordinary Kriging, thesis §3.8 with a constant trend) on the box ``bounds``, or with the
+    marginals ``inputs``: the kernel then acts on their reference variables (e.g. (x − mean)/std for a normal input;
+    docs/surrogates.md, "Input distributions").
 
     ``kernel`` (``"gaussian"`` = squared exponential, Eq. 3.20, or ``"matern52"``), maximum-likelihood ARD length
     scales (Eq. 3.21) from ``restarts`` seeded L-BFGS-B starts, ``nugget`` on the correlation diagonal; for a vector
@@ -232,39 +277,41 @@ class GP(_Kriging):
     gives the Kriging standard deviation; ``loo_error_`` is the Kriging (Dubrule) LOO.
     """
 
-    def __init__(self, bounds, *, names=None, kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
-                 restarts: int = RESTARTS, seed: int = 0, n_jobs: int = 1):
-        self.bounds, self.names = bounds, names
+    def __init__(self, bounds=None, *, inputs=None, names=None, kernel: str = "gaussian", share: str = "output",
+                 nugget: float = 1e-8, restarts: int = RESTARTS, seed: int = 0, n_jobs: int = 1):
+        self.bounds, self.inputs, self.names = bounds, inputs, names
         self.kernel, self.share, self.nugget, self.restarts, self.seed = kernel, share, nugget, restarts, seed
         self.n_jobs = n_jobs
 
-    def _fit_model(self, names, lower, upper, outputs, X, y) -> Surrogate:
+    def _fit_model(self, names, lower, upper, outputs, X, y, inputs) -> Surrogate:
         from spflow.plugins.surrogates.gp_model import GP as GPModel
 
-        return GPModel.fit(names, lower, upper, outputs, X, y, **self._kriging_options())
+        return GPModel.fit(names, lower, upper, outputs, X, y, inputs=inputs, **self._kriging_options())
 
 
 class PCK(_TrendSobol, _Kriging):
-    """PC-Kriging (thesis §3.8, Eq. 3.19): universal Kriging on a sparse-PCE (hybrid LARS) Legendre trend.
+    """PC-Kriging (thesis §3.8, Eq. 3.19): universal Kriging on a sparse-PCE (hybrid LARS) trend, orthonormal under
+    the box ``bounds`` (Legendre) or the marginals ``inputs``.
 
     ``degree_max`` and ``q`` bound the trend's PCE, ``mode`` is ``"sequential"`` (the whole LARS-selected trend) or
     ``"optimal"`` (the LOO-best LARS-ranked prefix); the Kriging options are :class:`GP`'s.
     """
 
-    def __init__(self, bounds, *, names=None, degree_max: int = 3, q: float = 0.9, mode: str = "sequential",
-                 kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8, restarts: int = RESTARTS,
-                 seed: int = 0, n_jobs: int = 1):
-        self.bounds, self.names, self.degree_max, self.q, self.mode = bounds, names, degree_max, q, mode
+    def __init__(self, bounds=None, *, inputs=None, names=None, degree_max: int = 3, q: float = 0.9,
+                 mode: str = "sequential", kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
+                 restarts: int = RESTARTS, seed: int = 0, n_jobs: int = 1):
+        self.bounds, self.inputs, self.names = bounds, inputs, names
+        self.degree_max, self.q, self.mode = degree_max, q, mode
         self.kernel, self.share, self.nugget, self.restarts, self.seed = kernel, share, nugget, restarts, seed
         self.n_jobs = n_jobs
 
-    def _fit_model(self, names, lower, upper, outputs, X, y) -> Surrogate:
+    def _fit_model(self, names, lower, upper, outputs, X, y, inputs) -> Surrogate:
         from spflow.plugins.surrogates.pck_model import PCK as PCKModel
 
-        return PCKModel.fit(names, lower, upper, outputs, X, y, degree_max=self.degree_max, q=self.q, mode=self.mode,
-                            **self._kriging_options())
+        return PCKModel.fit(names, lower, upper, outputs, X, y, inputs=inputs, degree_max=self.degree_max, q=self.q,
+                            mode=self.mode, **self._kriging_options())
 
     def sobol_indices(self) -> SobolIndices:
-        """First and total Sobol indices of the PC-Kriging *trend* (its GLS Legendre coefficients). The Kriging
+        """First and total Sobol indices of the PC-Kriging *trend* (its GLS coefficients). The Kriging
         part σ² Z(ξ) is NOT included: these are the model's indices only where the trend carries the response."""
         return super().sobol_indices()

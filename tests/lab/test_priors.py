@@ -21,6 +21,7 @@ from spflow.plugins.forward.parameters import PARAMETERS
 from spflow.plugins.lab import surfactant_fit_stages
 from spflow.plugins.lab.fit_result import FIT
 from spflow.plugins.lab.priors import Priors
+from spflow.plugins.surrogates.input_marginals import TruncatedNormal, Uniform, marginals_from_dataset
 
 BOUNDS = {p.name: (p.lower, p.upper) for p in PARAMETERS}
 CTX = StageContext("priors", verbose=False)
@@ -93,6 +94,29 @@ def test_boxes_are_clipped_to_the_physical_bounds():
     spread = Priors(names=["S2RC"], mode="fit_uncertainty").run(CTX, fit_desaturation=fit)
     assert float(spread["lower"].sel(param="S2RC")) == 0.0  # 0.02 - 2 * 0.05 < 0
     assert float(spread["upper"].sel(param="S2RC")) == pytest.approx(0.12)
+
+
+def test_truncated_normal_priors_are_the_fits_normals_on_the_boxes(fits):
+    """distribution='truncated_normal': N(estimate, std²) of each fit, truncated to the same box as the uniform
+    priors (here k = 2 standard errors, clipped); a 'ranges' parameter stays uniform; the laws round-trip through the
+    space's string variables, and the uniform default writes none."""
+    names = ["CSEL", "HBNC71", "T22", "E2C"]
+    space = Priors(names=names, mode="fit_uncertainty", distribution="truncated_normal",
+                   ranges={"E2C": TABLE_3_2["E2C"]}).run(CTX, **fits)
+    SPACE.validate(space, stage="priors", port="output")
+    laws = marginals_from_dataset(space, "priors")
+    for name, law in zip(names[:3], laws):
+        est, std = _estimate(fits, name)
+        lo, hi = max(BOUNDS[name][0], est - 2 * std), min(BOUNDS[name][1], est + 2 * std)
+        assert law == TruncatedNormal(est, std, float(space["lower"].sel(param=name)),
+                                      float(space["upper"].sel(param=name)))
+        assert law.support == pytest.approx((lo, hi), rel=1e-12)
+    assert laws[3] == Uniform(*TABLE_3_2["E2C"])
+    assert "distribution" not in Priors(names=names[:3], mode="fit_uncertainty").run(CTX, **fits).variables
+    with pytest.raises(ParameterError, match="AP2: the fit standard error from 'fit_polymer_rheology' is 0.0; "
+                                             "distribution='truncated_normal' needs it finite and > 0"):
+        Priors(names=["AP2"], distribution="truncated_normal").run(
+            CTX, fit_polymer_rheology=_fit(["AP2"], [1.0], [0.0]))
 
 
 def test_explicit_ranges_and_lhs_design(fits):

@@ -1,4 +1,5 @@
-"""The ``priors`` stage: the lab fits' estimates turned into the uniform parameter space of chapters 3-4.
+"""The ``priors`` stage: the lab fits' estimates turned into the parameter space of chapters 3-4 (uniform, as the
+thesis, or truncated normal).
 
 Thesis Algorithm 1 line 5 (and section 2.12): after the initial model calibration on the support experiments,
 "consider +/-20 % uncertainty and uniform distribution on input parameter X". For every selected parameter the box is
@@ -7,7 +8,14 @@ Thesis Algorithm 1 line 5 (and section 2.12): after the initial model calibratio
 * ``mode="fit_uncertainty"``: ``estimate -/+ k * std``, the fit's own standard error,
 
 clipped to the parameter's physical bounds (``spflow list params``). Parameters no lab test measures (e.g. the Corey
-exponents of Table 3.2) can be added with explicit ``ranges``. The output is the SPACE dataset of
+exponents of Table 3.2) can be added with explicit ``ranges``.
+
+``distribution="uniform"`` (default) makes every parameter uniform on its box, as the thesis. With
+``distribution="truncated_normal"`` each fitted parameter is N(estimate, std²) of its fit truncated to the box (the
+priors "as the lab fit produced them"), recorded in the space's ``distribution`` / ``distribution_parameters``
+variables (:func:`spflow.plugins.surrogates.input_marginals.marginal_variables`); parameters from ``ranges`` stay
+uniform. The surrogate stages fit under these marginals (docs/surrogates.md, Input distributions); the design and
+calibration stages still read only the box. The output is the SPACE dataset of
 :mod:`spflow.plugins.design.schemas` -- the same contract as ``parameter_space`` -- with ``default`` = the lab
 estimate, so it feeds ``lhs_design``, ``sobol_screening``, ``pce``, ``nsga2_calibration`` and the MCMC samplers
 unchanged.
@@ -27,6 +35,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.parameters import PARAMETERS, resolve_params
 from spflow.plugins.lab.fit_result import FIT
+from spflow.plugins.surrogates.input_marginals import TruncatedNormal, Uniform, marginal_variables
 
 __all__ = ["FIT_PORTS", "Priors", "prior_box"]
 
@@ -70,8 +79,9 @@ def prior_box(name: str, estimate: float, std: float, *, mode: str, relative: fl
 
 class Priors(Stage):
     name = "priors"
-    version = "2"
-    description = "uniform priors around lab-fit estimates (±20 % rule of Algorithm 1, or k fit standard errors)"
+    version = "3"  # 3: distribution="truncated_normal"; the marginals recorded in the space (issue #24)
+    description = ("priors around lab-fit estimates (±20 % rule of Algorithm 1, or k fit standard errors), uniform "
+                   "or truncated normal")
     inputs = {port: FIT for port in FIT_PORTS}
     optional_inputs = frozenset(FIT_PORTS)
     output = SPACE
@@ -82,6 +92,9 @@ class Priors(Stage):
         "relative": Param(float, 0.2, bounds=(0.0, 1.0), doc="half-width as a fraction of the estimate (thesis 0.2)"),
         "k": Param(float, 2.0, bounds=(0.0, None), doc="half-width in fit standard errors (mode fit_uncertainty)"),
         "ranges": Param(dict, {}, doc="name -> [low, high] for parameters no wired fit estimates"),
+        "distribution": Param(str, "uniform", choices=("uniform", "truncated_normal"),
+                              doc="law on the box: uniform (thesis), or N(estimate, std^2) of the fit truncated to "
+                                  "the box (parameters from 'ranges' stay uniform)"),
     }
 
     def __init__(self, **params):
@@ -134,21 +147,25 @@ class Priors(Stage):
         found = self._estimates(fits)
         names = list(self.params["names"])
         p = self.params
-        rows, source = [], []
+        rows, source, marginals = [], [], []
         for name in names:
             if name in self._ranges:
                 lo, hi = self._ranges[name]
                 rows.append((lo, hi, _BY_NAME[name].default))
                 source.append("ranges")
+                marginals.append(Uniform(lo, hi))
             else:
                 est, std, port = found[name]
                 lo, hi = prior_box(name, est, std, mode=p["mode"], relative=p["relative"], k=p["k"])
                 rows.append((lo, hi, est))
                 source.append(port)
+                marginals.append(_marginal(name, est, std, lo, hi, p["distribution"], port))
         lower, upper, centre = (np.array(c) for c in zip(*rows))
         _check_feasible(dict(zip(names, lower)), dict(zip(names, upper)))
+        laws = {} if p["distribution"] == "uniform" else marginal_variables(marginals)
         return xr.Dataset(
             {
+                **laws,
                 "lower": ("param", lower, {UNITS_VARIABLE: "unit"}),
                 "upper": ("param", upper, {UNITS_VARIABLE: "unit"}),
                 "default": ("param", centre, {UNITS_VARIABLE: "unit",
@@ -157,10 +174,22 @@ class Priors(Stage):
                 "source": ("param", np.array(source)),
             },
             coords={"param": ("param", names, {"long_name": "forward-model parameter"})},
-            attrs={"distribution": "independent uniform", "mode": p["mode"],
+            attrs={"distribution": "independent uniform" if p["distribution"] == "uniform" else
+                   "independent, per parameter in the variable 'distribution'", "mode": p["mode"],
                    "half_width": f"{p['relative']:g} * |estimate|" if p["mode"] == "relative"
                    else f"{p['k']:g} * std"},
         )
+
+
+def _marginal(name: str, estimate: float, std: float, lower: float, upper: float, distribution: str, port: str):
+    """The prior law of a fitted parameter on its box [lower, upper]: uniform, or N(estimate, std²) truncated to it."""
+    if distribution == "uniform":
+        return Uniform(lower, upper)
+    if not (np.isfinite(std) and std > 0.0):
+        raise ParameterError(f"stage 'priors': {name}: the fit standard error from {port!r} is {std!r}; "
+                             "distribution='truncated_normal' needs it finite and > 0 (use distribution='uniform' "
+                             "or give it explicit 'ranges')")
+    return TruncatedNormal(estimate, std, lower, upper)
 
 
 def _check_feasible(lower: dict[str, float], upper: dict[str, float]) -> None:

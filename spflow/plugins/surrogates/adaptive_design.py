@@ -5,7 +5,9 @@ Starting from ``n_initial`` Latin-hypercube points of the parameter space, the s
 (:mod:`.degree_adaptive`) and adds ``n_increment`` new points per iteration until the change of ε_LOO^mean (Eq. 3.9)
 between two iterations is below ``tolerance`` (thesis: Δε_LOO^mean < 5e-4, Algorithm 2 line 2) or ``n_max`` runs
 are spent. Each increment is a fresh Latin hypercube (seeded ``seed + iteration``) appended to the earlier points, so
-no simulation is thrown away; the union is no longer a Latin hypercube, only close to one.
+no simulation is thrown away; the union is no longer a Latin hypercube, only close to one. When the space records
+marginals (:mod:`.training_data`), each column of the hypercube goes through its marginal's quantile function, so the
+design is drawn from them, and the PCE is fitted under them.
 
 The output is the final surrogate (kind ``pce``) plus the history over the design sizes (dim ``n_s``):
 ε_LOO^mean, the mean modified LOO, ε_emp^mean (Eq. 3.10) and the selected degree.
@@ -29,7 +31,7 @@ from spflow.plugins.forward.stage import Forward
 from .contract import STORED_SURROGATE, with_parameter_units
 from .pce_model import PCE
 from .pce_stage import PCE_PARAMS, check_lists, fit_options
-from .training_data import training_set
+from .training_data import space_marginals, training_set
 
 __all__ = ["AdaptivePCE"]
 
@@ -38,7 +40,9 @@ _FORWARD_PARAMS = ("experiments", "fixed", "effects", "cells", "pv_step", "schem
 
 class AdaptivePCE(Stage):
     name = "adaptive_pce"
-    version = "3"  # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance; 3: + UDUNITS units per element
+    # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance; 3: + UDUNITS units per
+    # element; 4: the space's marginals honoured and recorded (issue #24)
+    version = "4"
     description = "PCE proxy on a growing LHS design until the mean LOO error settles (Algorithm 2)"
     inputs = {"space": SPACE}
     output = STORED_SURROGATE
@@ -73,7 +77,13 @@ class AdaptivePCE(Stage):
         from scipy.stats import qmc
 
         sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"] + iteration)
-        values = qmc.scale(sampler.random(size), space["lower"].values, space["upper"].values)
+        unit = sampler.random(size)
+        lower, upper = space["lower"].values, space["upper"].values
+        inputs = space_marginals(space, [str(n) for n in space["param"].values], lower, upper)
+        if inputs is None:
+            values = qmc.scale(unit, lower, upper)
+        else:
+            values = np.clip(np.column_stack([m.ppf(unit[:, j]) for j, m in enumerate(inputs)]), lower, upper)
         return ParameterMap.of(space).design(values)
 
     def run(self, ctx: StageContext, space: xr.Dataset) -> xr.Dataset:
@@ -90,7 +100,8 @@ class AdaptivePCE(Stage):
             response = xr.concat(responses, dim="sample", data_vars="minimal", coords="minimal",
                                  compat="override").assign_coords(sample=design["sample"].values)
             data = training_set(space, design, response, list(p["variables"]), self._names)
-            model = PCE.fit(data.names, data.lower, data.upper, data.outputs, data.x, data.y, **fit_options(p, ctx))
+            model = PCE.fit(data.names, data.lower, data.upper, data.outputs, data.x, data.y, inputs=data.inputs,
+                            **fit_options(p, ctx))
             rows.append((data.x.shape[0], np.mean(model.loo), np.mean(model.modified_loo), np.mean(model.empirical),
                          model.info["degree"]))
             n = data.x.shape[0]

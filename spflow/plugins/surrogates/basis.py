@@ -1,9 +1,10 @@
-"""Orthonormal Legendre basis on [-1, 1]^d with hyperbolic (q-norm) truncation (thesis §3.5, Eqs. 3.4-3.6).
+"""Orthonormal polynomial basis with hyperbolic (q-norm) truncation (thesis §3.5, Eqs. 3.4-3.6).
 
 The multi-index set is A = {α : (Σ_i α_i^q)^(1/q) <= p}, enumerated by numpoly in chaospy's
-``generate_expansion`` order (graded, constant term first). The design matrix Ψ_ij = Π_k P̃_{α_jk}(z_ik) uses the
-orthonormal Legendre polynomials P̃_n = sqrt(2n+1) P_n (unit variance under the uniform measure on [-1, 1]), from
-Bonnet's three-term recurrence.
+``generate_expansion`` order (graded, constant term first). The design matrix Ψ_ij = Π_k φ^(k)_{α_jk}(z_ik) takes
+each coordinate's factor from its own orthonormal family (:mod:`.orthonormal_polynomials`: Legendre for uniform
+inputs, P̃_n = sqrt(2n+1) P_n on [-1, 1] from Bonnet's recurrence; Hermite for normal and lognormal ones; Jacobi for
+beta ones); the multi-index set and its truncation do not depend on the families.
 
 Fast evaluation: every multi-index α with a non-zero entry has a *parent*, α with its last non-zero entry set to 0,
 and Ψ_α = Ψ_parent · P̃_{α_k}(z_k). Ordering the terms by their number of non-zero entries (adding the missing
@@ -14,6 +15,7 @@ depends only on the multi-indices and is cached.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -21,6 +23,8 @@ import numpoly
 from numba import njit
 
 from spflow.core.errors import ParameterError
+
+from .orthonormal_polynomials import LEGENDRE, PolynomialFamily, univariate_table
 
 __all__ = ["multi_indices", "design_matrix"]
 
@@ -78,20 +82,8 @@ def _plan(key: bytes, shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
 
 
 @njit(cache=True)
-def _fill(zt, target, parent, dim, degree, max_degree, work):  # pragma: no cover - compiled
-    d, n = zt.shape
-    table = np.empty((d, max_degree + 1, n))
-    for k in range(d):
-        for i in range(n):
-            x = zt[k, i]
-            p_prev, p_cur = 1.0, x
-            table[k, 0, i] = 1.0
-            if max_degree >= 1:
-                table[k, 1, i] = x * np.sqrt(3.0)
-            for m in range(1, max_degree):
-                p_next = ((2 * m + 1) * x * p_cur - m * p_prev) / (m + 1)
-                p_prev, p_cur = p_cur, p_next
-                table[k, m + 1, i] = p_next * np.sqrt(2.0 * m + 3.0)
+def _fill(table, target, parent, dim, degree, work):  # pragma: no cover - compiled
+    n = table.shape[2]
     for r in range(target.size):
         t = target[r]
         if degree[r] == 0:
@@ -103,8 +95,10 @@ def _fill(zt, target, parent, dim, degree, max_degree, work):  # pragma: no cove
                 work[t, i] = work[p, i] * table[k, m, i]
 
 
-def design_matrix(z: np.ndarray, indices: np.ndarray) -> np.ndarray:
-    """Ψ (n_points, P) at points ``z`` in [-1, 1]^d for multi-indices ``indices`` (P, d) (a Fortran-ordered view)."""
+def design_matrix(z: np.ndarray, indices: np.ndarray, families: Sequence[PolynomialFamily] | None = None) -> np.ndarray:
+    """Ψ (n_points, P) at reference points ``z`` (n_points, d) for multi-indices ``indices`` (P, d) (a Fortran-ordered
+    view). ``families`` gives each coordinate's orthonormal family (:mod:`.orthonormal_polynomials`); None means
+    Legendre for all, z in [-1, 1]^d."""
     z = np.atleast_2d(np.asarray(z, dtype=float))
     indices = np.ascontiguousarray(indices, dtype=np.int64)
     if indices.ndim != 2 or z.shape[1] != indices.shape[1]:
@@ -112,6 +106,8 @@ def design_matrix(z: np.ndarray, indices: np.ndarray) -> np.ndarray:
     if (indices < 0).any():
         raise ParameterError("basis: multi-indices must be non-negative")
     target, parent, dim, degree, n_rows = _plan(indices.tobytes(), indices.shape)
+    families = (LEGENDRE,) * z.shape[1] if families is None else tuple(families)
+    table = univariate_table(z.T, families, int(indices.max(initial=0)))
     work = np.empty((n_rows, z.shape[0]))
-    _fill(np.ascontiguousarray(z.T), target, parent, dim, degree, int(indices.max(initial=0)), work)
+    _fill(table, target, parent, dim, degree, work)
     return work[: indices.shape[0]].T

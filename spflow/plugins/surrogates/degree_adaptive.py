@@ -1,13 +1,13 @@
 """Degree- and q-norm-adaptive PCE fit (UQLab's regression loop; thesis Algorithm 2 lines 6-8).
 
-For p = 1, 2, ... and each q of the list, the q-norm basis A(p, q) (:mod:`.basis`) is fitted by OLS
-(:mod:`.regression`) or hybrid LARS (:mod:`.lars`) and scored by its corrected (modified) leave-one-out error
-ε*_LOO = T(P, N) ε_LOO, T(P, N) = N/(N − P) · (1 + tr(C_emp⁻¹)/N) with C_emp = ΨᵀΨ/N the empirical information
-matrix of the P selected terms (Blatman & Sudret 2011, J. Comput. Phys. 230:2345, after Chapelle, Vapnik & Bengio
-2002; UQLab PCE manual Eqs. 1.22-1.23). Vector outputs (the 0.1 PV time series of a QoI) share one basis: the score of
-a basis is ε^mean, the mean over outputs of ε*_LOO (Eq. 3.9 applied to the corrected LOO), and the basis with the
-smallest ε^mean wins. With OLS every output then has coefficients on the whole of A(p, q); with LARS each output keeps
-its own sparse support inside it (zeros elsewhere), as UQLab fits one sparse PCE per output component.
+For p = 1, 2, ... and each q of the list, the q-norm basis A(p, q) (:mod:`.basis`, one orthonormal family per input) is
+fitted by OLS (:mod:`.regression`) or hybrid LARS (:mod:`.lars`) and scored by its corrected (modified) leave-one-out
+error ε*_LOO = T(P, N) ε_LOO, T(P, N) = N/(N − P) · (1 + tr(C_emp⁻¹)/N) with C_emp = ΨᵀΨ/N the empirical information
+matrix of the P selected terms (Blatman & Sudret 2011, J. Comput. Phys. 230:2345, after Chapelle, Vapnik & Bengio 2002;
+UQLab PCE manual Eqs. 1.22-1.23). Vector outputs (the 0.1 PV time series of a QoI) share one basis: the score of a basis
+is ε^mean, the mean over outputs of ε*_LOO (Eq. 3.9 applied to the corrected LOO), and the basis with the smallest
+ε^mean wins. With OLS every output then has coefficients on the whole of A(p, q); with LARS each output keeps its own
+sparse support inside it (zeros elsewhere), as UQLab fits one sparse PCE per output component.
 
 Stopping rules (UQLab defaults):
 
@@ -46,6 +46,7 @@ import numpy as np
 from spflow.core.errors import DegreeCapWarning, ParameterError
 
 from .blas import single_threaded_blas
+from .orthonormal_polynomials import LEGENDRE, PolynomialFamily
 from .regression import ols
 
 __all__ = ["PCEFit", "fit_pce", "SOLVERS", "DEGREE_MAX", "MAX_TERMS_RATIO", "MIN_TERMS", "EXACT_FIT"]
@@ -121,7 +122,7 @@ def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, parallel) -> tuple[n
 
 
 def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], solver: str, target_loo,
-           max_terms_ratio):
+           max_terms_ratio, families):
     if z.ndim != 2 or y.ndim != 2 or z.shape[0] != y.shape[0]:
         raise ParameterError(f"fit_pce: need z (N, d) and y (N,) or (N, m) with the same N; got z {z.shape}, "
                              f"y {y.shape}")
@@ -129,8 +130,16 @@ def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], so
         raise ParameterError(f"fit_pce: need at least 3 training points, got {z.shape[0]}")
     if not (np.isfinite(z).all() and np.isfinite(y).all()):
         raise ParameterError("fit_pce: z and y must be finite")
-    if np.abs(z).max(initial=0.0) > 1.0 + 1e-9:
-        raise ParameterError("fit_pce: z must lie in the unit box [-1, 1]^d (map physical points with to_unit)")
+    if families is not None and len(families) != z.shape[1]:
+        raise ParameterError(f"fit_pce: need one polynomial family per column of z ({z.shape[1]}), got "
+                             f"{len(families)}")
+    for k, family in enumerate(families or [LEGENDRE] * z.shape[1]):
+        lo, hi = family.support
+        slack = 1e-9 * (hi - lo) if np.isfinite(hi - lo) else 0.0
+        if ((z[:, k] < lo - slack) | (z[:, k] > hi + slack)).any():
+            raise ParameterError(f"fit_pce: z[:, {k}] must lie in the support [{lo:g}, {hi:g}] of its {family.name} "
+                                 f"polynomials (for uniform inputs, the unit box [-1, 1]^d: map physical points with "
+                                 f"to_unit)")
     if isinstance(degree_max, bool) or not isinstance(degree_max, (int, np.integer)) or not 1 <= degree_max <= 20:
         raise ParameterError(f"fit_pce: degree_max must be an integer in [1, 20], got {degree_max!r}")
     if not q or any(not 0.0 < float(v) <= 1.0 for v in q):
@@ -152,8 +161,12 @@ def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], so
 def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float | Sequence[float] = 0.9,
             solver: str = "ols", target_loo: float | None = 0.0, early_stop: bool = True,
             max_terms_ratio: float = MAX_TERMS_RATIO, parallel=None,
-            progress: Callable[[int, int], None] | None = None) -> PCEFit:
-    """Fit a PCE of ``y`` (N,) or (N, m) at points ``z`` (N, d) of [-1, 1]^d, choosing degree and q as above.
+            progress: Callable[[int, int], None] | None = None,
+            families: Sequence[PolynomialFamily] | None = None) -> PCEFit:
+    """Fit a PCE of ``y`` (N,) or (N, m) at reference points ``z`` (N, d), choosing degree and q as above.
+
+    ``families`` gives each coordinate's orthonormal family (:mod:`.orthonormal_polynomials`); None means Legendre
+    for all, z in [-1, 1]^d.
 
     ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers;
     ``progress(degree, degree_max)`` (e.g. from ``ctx.report_progress``) is told each degree tried, and
@@ -166,7 +179,7 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     y = np.asarray(y, dtype=float)
     y = y[:, None] if y.ndim == 1 else y
     qs = [float(v) for v in (q if isinstance(q, Sequence) else [q])]
-    _check(z, y, degree_max, qs, solver, target_loo, max_terms_ratio)
+    _check(z, y, degree_max, qs, solver, target_loo, max_terms_ratio, families)
     max_terms = max(int(max_terms_ratio * z.shape[0]), MIN_TERMS)
     history: list[tuple[int, float, int, float]] = []
     best, best_score, degree_scores = None, np.inf, []
@@ -182,7 +195,7 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
                 too_big.append(indices.shape[0])
                 continue
             with single_threaded_blas():
-                coef, loo, modified, emp = _fit_basis(design_matrix(z, indices), y, solver, parallel)
+                coef, loo, modified, emp = _fit_basis(design_matrix(z, indices, families), y, solver, parallel)
             score = float(np.mean(modified))
             history.append((degree, qv, indices.shape[0], score))
             q_scores.append(score)

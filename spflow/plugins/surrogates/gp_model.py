@@ -22,10 +22,12 @@ class GP(KrigingSurrogate):
     @classmethod
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
             y: np.ndarray, *, kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
-            restarts: int = RESTARTS, seed: int = 0, parallel=None, progress=None) -> GP:
-        """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
+            restarts: int = RESTARTS, seed: int = 0, parallel=None, progress=None, inputs=None) -> GP:
+        """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m); the inputs are uniform on the box
+        unless ``inputs`` gives their marginals (:mod:`.input_marginals`): the kernel then acts on their reference
+        variables (:meth:`to_unit`), e.g. (x − mean)/std for a normal input."""
         constant = np.zeros((1, len(names)), dtype=np.int64)
         orders = [np.zeros(1, dtype=np.int64)] * len(outputs)
         return cls.fit_trends(names, lower, upper, outputs, x, y, constant, orders, mode="sequential",
                               kernel=kernel, share=share, nugget=nugget, restarts=restarts, seed=seed,
-                              parallel=parallel, progress=progress)
+                              parallel=parallel, progress=progress, inputs=inputs)

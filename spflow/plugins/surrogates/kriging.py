@@ -1,12 +1,12 @@
 """Universal Kriging at fixed correlation hyperparameters: GLS trend, process variance, prediction, Dubrule LOO.
 
-The model of thesis Eqs. 3.18-3.19 (Schöbi, Sudret & Wiart 2015): y(z) = f(z)ᵀβ + σ² Z(z), with f a set of
-orthonormal Legendre polynomials (the PC-Kriging trend; the constant alone gives ordinary Kriging) and Z a
-stationary unit-variance Gaussian process with correlation R(z, z'; θ) -- the squared exponential of Eq. 3.20 or
-Matérn 5/2. Several output columns may share one correlation matrix (one Cholesky factor) while each keeps its own
-trend terms, coefficients and process variance. With R = C(θ) + τI (τ: a small nugget for conditioning) and
-F_ij = f_j(z_i), for each column y (Schöbi, Sudret & Wiart 2015; docs/surrogates.md, Closed forms at fixed
-hyperparameters):
+The model of thesis Eqs. 3.18-3.19 (Schöbi, Sudret & Wiart 2015): y(z) = f(z)ᵀβ + σ² Z(z), with f a set of orthonormal
+polynomials of the inputs' marginals (Legendre for uniform inputs; the PC-Kriging trend; the constant alone gives
+ordinary Kriging) and Z a stationary unit-variance Gaussian process with correlation R(z, z'; θ) -- the squared
+exponential of Eq. 3.20 or Matérn 5/2. Several output columns may share one correlation matrix (one Cholesky factor)
+while each keeps its own trend terms, coefficients and process variance. With R = C(θ) + τI (τ: a small nugget for
+conditioning) and F_ij = f_j(z_i), for each column y (Schöbi, Sudret & Wiart 2015; docs/surrogates.md, Closed forms at
+fixed hyperparameters):
 
 * β̂ = (FᵀR⁻¹F)⁻¹FᵀR⁻¹y (generalised least squares), σ̂² = (y − Fβ̂)ᵀR⁻¹(y − Fβ̂)/N;
 * mean μ(z) = f(z)ᵀβ̂ + r(z)ᵀR⁻¹(y − Fβ̂);

@@ -56,13 +56,16 @@ class _KrigingStage(Stage):
         options = {k: self.params[k] for k in ("kernel", "share", "restarts", "seed", "nugget")}
         options["parallel"] = ctx.parallel() if ctx.n_jobs > 1 else None
         options["progress"] = lambda groups: ctx.progress(groups, what="length-scale fits")
+        options["inputs"] = data.inputs  # the space's marginals (None: uniform on the box)
         return with_parameter_units(self._fit(data, options).to_dataset(), space)
 
 
 class PCKStage(_KrigingStage):
     name = "pck"
-    version = "3"  # 2: the trend's hybrid LARS ranks by the LASSO-modified path (issue #24); 3: + UDUNITS units per element
-    description = "PC-Kriging proxy (universal Kriging on a hybrid-LARS Legendre trend, ML length scales)"
+    # 2: the trend's hybrid LARS ranks by the LASSO-modified path (issue #24); 3: + UDUNITS units per element; 4: the
+    # space's marginals honoured and recorded (issue #24)
+    version = "4"
+    description = "PC-Kriging proxy (universal Kriging on a hybrid-LARS polynomial-chaos trend, ML length scales)"
     params = {
         **KRIGING_PARAMS,
         "mode": Param(str, "sequential", choices=list(MODES),
@@ -78,7 +81,7 @@ class PCKStage(_KrigingStage):
 
 class GPStage(_KrigingStage):
     name = "gp"
-    version = "2"
+    version = "3"  # 3: the space's marginals honoured (kernel in their reference variables) and recorded
     description = "plain Gaussian-process proxy (ordinary Kriging, ML length scales)"
     params = KRIGING_PARAMS
 

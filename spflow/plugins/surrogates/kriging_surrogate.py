@@ -33,7 +33,8 @@ from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError, SchemaError
 
 from .blas import single_threaded_blas
-from .contract import Surrogate
+from .contract import Surrogate, reference_points, resolve_inputs
+from .input_marginals import check_support
 from .kriging import KERNELS, UniversalKriging
 from .outputs import OutputIndex
 from .pck_modes import MODES, fit_group
@@ -69,7 +70,8 @@ def output_groups(outputs: OutputIndex, share: str) -> np.ndarray:
 
 
 class KrigingSurrogate(Surrogate):
-    """Universal Kriging of every output column with a (possibly constant-only) Legendre trend.
+    """Universal Kriging of every output column with a (possibly constant-only) polynomial trend, on the reference
+    variables of the inputs (:meth:`to_unit`: [-1, 1]^d for uniform inputs).
 
     Subclasses set :attr:`kind` and build the trend candidates; construction from stored arrays is common.
     """
@@ -79,11 +81,12 @@ class KrigingSurrogate(Surrogate):
 
     def __init__(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
                  x: np.ndarray, y: np.ndarray, indices: np.ndarray, trend: np.ndarray, group: np.ndarray,
-                 lengthscale: np.ndarray, nugget: np.ndarray, kernel: str, info: dict):
+                 lengthscale: np.ndarray, nugget: np.ndarray, kernel: str, info: dict, inputs=None,
+                 input_note: str = ""):
         from .basis import design_matrix  # numba: on first use
 
-        lower, upper, x, y = self.check_training(names, lower, upper, outputs, x, y)
-        super().__init__(names, lower, upper, outputs)
+        lower, upper, x, y = self.check_training(names, lower, upper, outputs, x, y, inputs)
+        super().__init__(names, lower, upper, outputs, inputs, input_note)
         self.x, self.y = x, y
         self.indices = np.ascontiguousarray(indices, dtype=np.int64)
         self.trend = np.asarray(trend, dtype=bool)
@@ -94,7 +97,7 @@ class KrigingSurrogate(Surrogate):
         self.info = dict(info)
         self._check_shapes()
         z = self.to_unit(self.x)
-        basis = design_matrix(z, self.indices)
+        basis = design_matrix(z, self.indices, self.families)
         self.coefficients = np.zeros((len(outputs), self.indices.shape[0]))
         self.process_variance = np.zeros(len(outputs))
         self.loo = np.zeros(len(outputs))
@@ -147,8 +150,9 @@ class KrigingSurrogate(Surrogate):
 
     @classmethod
     def check_training(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
-                       x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
-        """``lower``, ``upper``, ``x`` (n, d), ``y`` (n, m) as float arrays; shapes, finiteness and the box checked."""
+                       x: np.ndarray, y: np.ndarray, inputs=None) -> tuple[np.ndarray, ...]:
+        """``lower``, ``upper``, ``x`` (n, d), ``y`` (n, m) as float arrays; shapes, finiteness and the box checked
+        (the supports of the marginals ``inputs``, when given)."""
         lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
         x = np.atleast_2d(np.asarray(x, dtype=float))
         y = np.asarray(y, dtype=float)
@@ -163,6 +167,10 @@ class KrigingSurrogate(Surrogate):
             raise ParameterError(f"{cls.label}: training x and y must be finite")
         if lower.shape != (d,) or upper.shape != (d,) or not np.all(lower < upper):
             raise ParameterError(f"{cls.label}: bounds must satisfy lower < upper for each of the {d} parameters")
+        if inputs is not None:
+            check_support(resolve_inputs(names, lower, upper, inputs, cls.label), names, x,
+                          f"{cls.label}: training points")
+            return lower, upper, x, y
         slack = 1e-9 * (upper - lower)
         if ((x < lower - slack) | (x > upper + slack)).any():
             raise ParameterError(f"{cls.label}: training points must lie in the box lower={lower}, upper={upper}")
@@ -172,22 +180,25 @@ class KrigingSurrogate(Surrogate):
     def fit_trends(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
                    x: np.ndarray, y: np.ndarray, indices: np.ndarray, orders: list[np.ndarray], *, mode: str,
                    kernel: str, share: str, nugget: float, restarts: int, seed: int, parallel=None,
-                   info: dict | None = None, progress=None) -> KrigingSurrogate:
+                   info: dict | None = None, progress=None, inputs=None) -> KrigingSurrogate:
         """Fit length scales (and, in ``optimal`` mode, trend sizes) group by group and build the surrogate.
 
         ``indices`` (P, d) are the trend candidates; ``orders[j]`` ranks column j's candidates (rows of ``indices``).
         ``parallel`` (a :class:`joblib.Parallel`) spreads the groups over workers; ``progress`` (e.g.
         ``ctx.progress``) wraps the iterable of groups to report how many were fitted (dispatched, in parallel).
+        ``inputs`` (one marginal per parameter, :mod:`.input_marginals`; None = uniform on the box): the kernel and
+        the trend act on the reference variables ξ = T(x) of the marginals, so the length scales are in ξ.
         """
         from .basis import design_matrix
 
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
-        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
+        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y, inputs)
         if len(orders) != y.shape[1]:
             raise ParameterError(f"{cls.label}: need one trend order per output ({y.shape[1]}), got {len(orders)}")
         group = output_groups(outputs, share)
-        z = 2.0 * (x - lower) / (upper - lower) - 1.0
-        basis = design_matrix(z, indices)
+        marginals = resolve_inputs(names, lower, upper, inputs, cls.label)
+        z = reference_points(marginals, x)
+        basis = design_matrix(z, indices, [m.polynomials for m in marginals])
         seeds = np.random.SeedSequence(seed).generate_state(group.max() + 1)
         jobs = []
         for g in range(group.max() + 1):
@@ -210,7 +221,7 @@ class KrigingSurrogate(Surrogate):
             lengthscale[g] = lengths
         info = {"mode": mode, "share": share, "restarts": restarts, "seed": seed, **(info or {})}
         return cls(names, lower, upper, outputs, x, y, indices, trend, group, lengthscale,
-                   np.full(len(jobs), float(nugget)), kernel, info)
+                   np.full(len(jobs), float(nugget)), kernel, info, inputs)
 
     # -- prediction -------------------------------------------------------------------------------------------------
     def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -224,7 +235,7 @@ class KrigingSurrogate(Surrogate):
         from .basis import design_matrix
 
         z = self.to_unit(x)
-        basis = design_matrix(z, self.indices)
+        basis = design_matrix(z, self.indices, self.families)
         mean = np.empty((z.shape[0], len(self.outputs)))
         var = np.empty_like(mean) if variance else None
         with single_threaded_blas():  # many small products: one limit around all the groups
@@ -250,8 +261,9 @@ class KrigingSurrogate(Surrogate):
                                   {UNITS_VARIABLE: "output_unit_squared", "long_name": "Kriging process variance σ²"}),
              "output_group": ("output", self.group, {"units": "1", "long_name": "length-scale group of the output"}),
              "lengthscale": (("group", "param"), self.lengthscale,
-                             {"units": "1", "long_name": "correlation length ℓ in the auxiliary space [-1, 1]; "
-                                                        "Eq. 3.20's θ = sqrt(2) ℓ for the gaussian kernel"}),
+                             {"units": "1", "long_name": "correlation length ℓ in the reference space of the inputs "
+                                                        "([-1, 1] for uniform ones); Eq. 3.20's θ = sqrt(2) ℓ for "
+                                                        "the gaussian kernel"}),
              "nugget": ("group", self.nugget, {"units": "1", "long_name": "added to the correlation diagonal"}),
              "loo": ("output", self.loo, {"units": "1", "long_name": "Kriging LOO error ε_LOO (Eq. 3.8, Dubrule)"})},
             coords={"term": ("term", np.arange(self.indices.shape[0]), {"units": "1", "long_name": "trend term"}),
@@ -269,7 +281,8 @@ class KrigingSurrogate(Surrogate):
             raise SchemaError(f"{cls.label} surrogate Dataset lacks {missing or ['attrs.kernel']}")
         info = {k: ds.attrs[k] for k in ds.attrs
                 if k not in ("surrogate", "kernel", "loo_mean") and not k.startswith("units_")}
-        return cls(**cls._common(ds), x=ds["train_x"].transpose("train", "param").values,
+        return cls(**cls._common(ds), **cls._stored_inputs(ds),
+                   x=ds["train_x"].transpose("train", "param").values,
                    y=ds["train_y"].transpose("train", "output").values, indices=ds["multi_index"].values,
                    trend=ds["trend"].values.astype(bool), group=ds["output_group"].values,
                    lengthscale=ds["lengthscale"].values, nugget=ds["nugget"].values, kernel=ds.attrs["kernel"],

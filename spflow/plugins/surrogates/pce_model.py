@@ -1,17 +1,18 @@
-"""The ``pce`` surrogate kind: a polynomial chaos expansion on the orthonormal Legendre basis (thesis Eq. 3.4).
+"""The ``pce`` surrogate kind: a polynomial chaos expansion on the orthonormal basis of its inputs' marginals (thesis
+Eq. 3.4): Legendre for uniform inputs, Hermite for normal and lognormal ones, Jacobi for beta ones, Stieltjes
+polynomials of the truncated normal for truncated normal ones (:mod:`.input_marginals`).
 
 Stored as arrays, no pickle: ``coefficients`` (output, term), ``multi_index`` (term, param), the per-output errors
 (``loo``, ``modified_loo``, ``empirical``; Eqs. 3.7-3.8) and the training outputs' population variance.
 
-Prediction: the mean is Σ_α y_α Ψ_α(z) at z = :meth:`to_unit` (x). The variance returned by :meth:`predict` is the
-corrected LOO estimate of the proxy's squared error, ε*_LOO · Var̂(y) = T(P, N) (1/N) Σ_i (e_i / (1 − h_i))² with
-T(P, N) = N/(N − P) · (1 + tr(C_emp⁻¹)/N) (Blatman & Sudret 2011, :mod:`.degree_adaptive`), per output and constant
-in x — a PCE has no pointwise error model, and this is the number calibration adds to a likelihood's noise variance
-(docs/surrogates.md, The model; docs/calibration.md, The posterior). The plain LOO underestimates the error of a
-LARS-selected basis (the selection has seen every point; issue #24 measured 1.5-4x at N <= 100), the corrected one
-does not. Moments (Eqs. 3.11-3.12) and Sobol indices come
-from the coefficients
-(:mod:`.sobol_from_pce`), never from chaospy's symbolic ``Var``/``Sens_*``.
+Prediction: the mean is Σ_α y_α Ψ_α(z) at the reference point z = :meth:`to_unit` (x). The variance returned by
+:meth:`predict` is the corrected LOO estimate of the proxy's squared error,
+ε*_LOO · Var̂(y) = T(P, N) (1/N) Σ_i (e_i / (1 − h_i))² with T(P, N) = N/(N − P) · (1 + tr(C_emp⁻¹)/N) (Blatman &
+Sudret 2011, :mod:`.degree_adaptive`), per output and constant in x — a PCE has no pointwise error model, and this is
+the number calibration adds to a likelihood's noise variance (docs/surrogates.md, The model; docs/calibration.md, The
+posterior). The plain LOO underestimates the error of a LARS-selected basis (the selection has seen every point; issue
+#24 measured 1.5-4x at N <= 100), the corrected one does not. Moments (Eqs. 3.11-3.12) and Sobol indices come from the
+coefficients (:mod:`.sobol_from_pce`), never from chaospy's symbolic ``Var``/``Sens_*``.
 """
 
 from __future__ import annotations
@@ -25,8 +26,9 @@ from spflow.core.errors import ParameterError
 
 from . import sobol_from_pce as sobol
 from .blas import single_threaded_blas
-from .contract import Surrogate
+from .contract import Surrogate, reference_points, resolve_inputs
 from .degree_adaptive import PCEFit, fit_pce
+from .input_marginals import check_support
 from .outputs import OutputIndex
 
 __all__ = ["PCE"]
@@ -43,8 +45,8 @@ class PCE(Surrogate):
 
     def __init__(self, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
                  indices: np.ndarray, coefficients: np.ndarray, loo: np.ndarray, modified_loo: np.ndarray,
-                 empirical: np.ndarray, output_variance: np.ndarray, info: dict):
-        super().__init__(names, lower, upper, outputs)
+                 empirical: np.ndarray, output_variance: np.ndarray, info: dict, inputs=None, input_note: str = ""):
+        super().__init__(names, lower, upper, outputs, inputs, input_note)
         self.indices = np.ascontiguousarray(indices, dtype=np.int64)
         self.coefficients = np.ascontiguousarray(coefficients, dtype=float)
         self.loo, self.modified_loo = np.asarray(loo, dtype=float), np.asarray(modified_loo, dtype=float)
@@ -59,30 +61,35 @@ class PCE(Surrogate):
                                  f"{self.coefficients.shape}")
         if any(a.shape != (m,) for a in (self.loo, self.modified_loo, self.empirical, self.output_variance)):
             raise ParameterError(f"PCE: per-output errors must have length {m}")
-        if self.lower.shape != (d,) or self.upper.shape != (d,) or not np.all(self.lower < self.upper):
-            raise ParameterError(f"PCE: bounds must satisfy lower < upper for each of the {d} parameters")
 
     @classmethod
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
-            y: np.ndarray, **options) -> PCE:
-        """Fit on points ``x`` (N, d) in physical units inside the box and outputs ``y`` (N, m); ``options`` go to
+            y: np.ndarray, *, inputs=None, **options) -> PCE:
+        """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m). The inputs are uniform on the box
+        unless ``inputs`` gives one marginal per parameter (:mod:`.input_marginals`; then ``lower``/``upper`` are
+        their supports, :func:`.contract.input_box`), and ``x`` should be drawn from them: the coefficients are a
+        least-squares projection under the empirical measure of ``x``. ``options`` go to
         :func:`.degree_adaptive.fit_pce` (``degree_max``, ``q``, ``solver``, ``target_loo``, ``parallel``...)."""
-        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        marginals = resolve_inputs(names, lower, upper, inputs, "PCE.fit")
         x = np.atleast_2d(np.asarray(x, dtype=float))
         if x.shape[1] != len(names):
             raise ParameterError(f"PCE.fit: x must have one column per parameter {list(names)}, got shape {x.shape}")
         y = np.asarray(y, dtype=float).reshape(x.shape[0], -1)
         if y.shape[1] != len(outputs):
             raise ParameterError(f"PCE.fit: y has {y.shape[1]} columns for {len(outputs)} outputs")
-        result = fit_pce(2.0 * (x - lower) / (upper - lower) - 1.0, y, **options)
-        return cls.from_fit(names, lower, upper, outputs, result, n_train=x.shape[0])
+        if inputs is not None:
+            if not np.isfinite(x).all():
+                raise ParameterError("PCE.fit: training x must be finite")
+            check_support(marginals, names, x, "PCE.fit: training x")
+        result = fit_pce(reference_points(marginals, x), y, families=[m.polynomials for m in marginals], **options)
+        return cls.from_fit(names, lower, upper, outputs, result, n_train=x.shape[0], inputs=inputs)
 
     @classmethod
-    def from_fit(cls, names, lower, upper, outputs, result: PCEFit, n_train: int) -> PCE:
+    def from_fit(cls, names, lower, upper, outputs, result: PCEFit, n_train: int, inputs=None) -> PCE:
         info = {"degree": result.degree, "q": result.q, "solver": result.solver, "n_train": n_train,
                 "degree_cap": result.degree_cap, "degree_cap_warning": result.cap_warning}
         return cls(names, lower, upper, outputs, result.indices, result.coefficients, result.loo,
-                   result.modified_loo, result.empirical, result.output_variance, info)
+                   result.modified_loo, result.empirical, result.output_variance, info, inputs)
 
     # -- prediction ---------------------------------------------------------------------------------------------
     @property
@@ -99,12 +106,13 @@ class PCE(Surrogate):
         with single_threaded_blas(z.shape[0] * coef_t.size):
             for start in range(0, z.shape[0], _BLOCK):
                 stop = min(start + _BLOCK, z.shape[0])
-                np.matmul(design_matrix(z[start:stop], self.indices), coef_t, out=mean[start:stop])
+                np.matmul(design_matrix(z[start:stop], self.indices, self.families), coef_t, out=mean[start:stop])
         return mean, np.broadcast_to(self.error_variance, mean.shape).copy()
 
     # -- statistics from the coefficients -----------------------------------------------------------------------
     def moments(self) -> tuple[np.ndarray, np.ndarray]:
-        """Mean and variance of every output under the uniform input box (Eqs. 3.11-3.12)."""
+        """Mean and variance of every output under the input marginals (Eqs. 3.11-3.12; the basis is orthonormal
+        under them, whatever the families)."""
         return sobol.moments(self.indices, self.coefficients)
 
     def sobol(self) -> xr.Dataset:
@@ -125,7 +133,8 @@ class PCE(Surrogate):
         errors = {name: ("output", getattr(self, name), {"units": "1", "long_name": what[name]}) for name in what}
         ds = self._dataset(
             {"coefficients": (("output", "term"), self.coefficients,
-                              {UNITS_VARIABLE: "output_unit", "long_name": "PCE coefficients (Legendre basis)"}),
+                              {UNITS_VARIABLE: "output_unit", "long_name": "PCE coefficients (orthonormal basis of the "
+                                                                           "input marginals)"}),
              "multi_index": (("term", "param"), self.indices, {"units": "1", "long_name": "polynomial degree of "
                                                                                          "each parameter in the term"}),
              "output_variance": ("output", self.output_variance,
@@ -144,6 +153,6 @@ class PCE(Surrogate):
         info = {k: ds.attrs[k] for k in ("degree", "q", "solver", "n_train")}
         # stores written before the degree cap was recorded (pce stage version 1) have no cap attrs
         info.update({k: ds.attrs[k] for k in ("degree_cap", "degree_cap_warning") if k in ds.attrs})
-        return cls(**cls._common(ds), indices=ds["multi_index"].values, coefficients=ds["coefficients"].values,
-                   loo=ds["loo"].values, modified_loo=ds["modified_loo"].values, empirical=ds["empirical"].values,
-                   output_variance=ds["output_variance"].values, info=info)
+        return cls(**cls._common(ds), **cls._stored_inputs(ds), indices=ds["multi_index"].values,
+                   coefficients=ds["coefficients"].values, loo=ds["loo"].values, modified_loo=ds["modified_loo"].values,
+                   empirical=ds["empirical"].values, output_variance=ds["output_variance"].values, info=info)

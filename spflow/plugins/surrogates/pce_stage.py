@@ -1,10 +1,11 @@
 """The ``pce`` stage: a degree-adaptive PCE proxy of simulator responses (thesis §3.5, Algorithm 2 lines 5-10).
 
-Inputs: the parameter ``space`` (uniform box), the training ``design`` on it and the forward stage's ``responses`` at
-the design points. Output: the fitted surrogate Dataset (:data:`~.contract.STORED_SURROGATE`, kind ``pce``) with
-per-output ``loo``, ``modified_loo`` and ``empirical`` errors and their means over outputs (ε^mean, Eqs. 3.9-3.10)
-in attrs, with ``degree_cap`` (the largest degree the search could try) and ``degree_cap_warning`` ("" unless the
-selected degree is that cap, :class:`~spflow.core.errors.DegreeCapWarning`).
+Inputs: the parameter ``space`` (a uniform box, or the marginals it records: :mod:`.training_data`), the training
+``design`` on it and the forward stage's ``responses`` at the design points. Output: the fitted surrogate Dataset
+(:data:`~.contract.STORED_SURROGATE`, kind ``pce``) with per-output ``loo``, ``modified_loo`` and ``empirical`` errors
+and their means over outputs (ε^mean, Eqs. 3.9-3.10) in attrs, with ``degree_cap`` (the largest degree the search
+could try) and ``degree_cap_warning`` ("" unless the selected degree is that cap,
+:class:`~spflow.core.errors.DegreeCapWarning`).
 """
 
 from __future__ import annotations
@@ -60,7 +61,9 @@ def check_lists(stage: str, params) -> None:
 
 class PCEStage(Stage):
     name = "pce"
-    version = "3"  # 2: degree cap 15 + basis-size limit, corrected LOO as the error variance, degree_cap attrs; 3: + UDUNITS units per element
+    # 2: degree cap 15 + basis-size limit, corrected LOO as the error variance, degree_cap attrs; 3: + UDUNITS units
+    # per element; 4: the space's marginals honoured and recorded (distribution, distribution_parameters; issue #24)
+    version = "4"
     description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
     output = STORED_SURROGATE
@@ -72,6 +75,6 @@ class PCEStage(Stage):
 
     def run(self, ctx: StageContext, space: xr.Dataset, design: xr.Dataset, responses: xr.Dataset) -> xr.Dataset:
         data = training_set(space, design, responses, list(self.params["variables"]), list(self.params["experiments"]))
-        model = PCE.fit(data.names, data.lower, data.upper, data.outputs, data.x, data.y,
+        model = PCE.fit(data.names, data.lower, data.upper, data.outputs, data.x, data.y, inputs=data.inputs,
                         **fit_options(self.params, ctx))
         return with_parameter_units(model.to_dataset(), space)

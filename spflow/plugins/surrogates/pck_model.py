@@ -12,6 +12,7 @@ import numpy as np
 import xarray as xr
 
 from . import sobol_from_pce as sobol
+from .contract import reference_points, resolve_inputs
 from .degree_adaptive import fit_pce
 from .kriging_surrogate import RESTARTS, KrigingSurrogate, output_groups
 from .outputs import OutputIndex
@@ -29,26 +30,30 @@ class PCK(KrigingSurrogate):
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
             y: np.ndarray, *, degree_max: int = 3, q: float = 0.9, mode: str = "sequential",
             kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8, restarts: int = RESTARTS,
-            seed: int = 0, parallel=None, progress=None) -> PCK:
-        """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m)."""
+            seed: int = 0, parallel=None, progress=None, inputs=None) -> PCK:
+        """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m); the inputs are uniform on the box
+        unless ``inputs`` gives their marginals (:mod:`.input_marginals`): the trend is then a PCE on their
+        orthonormal families and the kernel acts on their reference variables."""
         from .basis import design_matrix  # numba and scikit-learn load when a PCK is fitted
         from .lars import hybrid_lars_outputs
 
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
-        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y)
+        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y, inputs)
         output_groups(outputs, share)  # a share="variable" with nothing to share refuses before the trend is fitted
-        z = 2.0 * (x - lower) / (upper - lower) - 1.0
-        pce = fit_pce(z, y, degree_max=degree_max, q=q, solver="lars", parallel=parallel)
-        ranked = [r.active for r in hybrid_lars_outputs(design_matrix(z, pce.indices), y)]
+        marginals = resolve_inputs(names, lower, upper, inputs, cls.label)
+        families = [m.polynomials for m in marginals]
+        z = reference_points(marginals, x)
+        pce = fit_pce(z, y, degree_max=degree_max, q=q, solver="lars", parallel=parallel, families=families)
+        ranked = [r.active for r in hybrid_lars_outputs(design_matrix(z, pce.indices, families), y)]
         used = np.unique(np.concatenate(ranked))  # keep only the terms some output's trend can use
         orders = [np.searchsorted(used, r) for r in ranked]
         info = {"pce_degree": pce.degree, "pce_q": pce.q, "pce_loo_mean": pce.loo_mean}
         return cls.fit_trends(names, lower, upper, outputs, x, y, pce.indices[used], orders, mode=mode,
                               kernel=kernel, share=share, nugget=nugget, restarts=restarts, seed=seed,
-                              parallel=parallel, info=info, progress=progress)
+                              parallel=parallel, info=info, progress=progress, inputs=inputs)
 
     def sobol(self) -> xr.Dataset:
-        """First-order and total Sobol indices of the Kriging *trend* Σ β̂_α Ψ_α (orthonormal Legendre polynomials,
+        """First-order and total Sobol indices of the Kriging *trend* Σ β̂_α Ψ_α (orthonormal under the input marginals,
         :mod:`.sobol_from_pce` applied to the GLS coefficients), dims (output, param). The Gaussian-process part
         σ² Z(ξ) of Eq. 3.19 is not included: these are the indices of the polynomial trend only, equal to those of the
         model when the trend carries the response (a small process variance)."""

@@ -5,6 +5,11 @@ Every surrogate stage (``pce``, ``adaptive_pce``, the Kriging ones, ``surrogate_
 these checks, so a design whose parameters differ from the space's, a responses Dataset of another length or a point
 outside the box fails with one clear message before any fitting. Samples whose forward runs failed (the
 ``forward`` stage's ``failure`` variable) are dropped with a warning saying how many.
+
+A space may record the marginal law of each parameter (``distribution`` / ``distribution_parameters``, as the
+``priors`` stage writes for ``distribution="truncated_normal"``; :func:`.input_marginals.marginal_variables`). The
+surrogate stages then fit under these marginals (:attr:`TrainingSet.inputs`). Each marginal's support must be the
+space's range [lower, upper] -- uniform, truncated normal or beta -- since the designs are drawn inside that box.
 """
 
 from __future__ import annotations
@@ -17,14 +22,16 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 from spflow.plugins.forward.failures import drop_failed
 
+from .input_marginals import Marginal, marginals_from_dataset
 from .outputs import OutputIndex, stack_outputs
 
-__all__ = ["TrainingSet", "design_points", "training_set"]
+__all__ = ["TrainingSet", "design_points", "training_set", "space_marginals"]
 
 
 @dataclass(frozen=True)
 class TrainingSet:
-    """Points ``x`` (N, d) in physical units in the box ``lower``..``upper`` and outputs ``y`` (N, m)."""
+    """Points ``x`` (N, d) in physical units in the box ``lower``..``upper`` and outputs ``y`` (N, m); ``inputs``, the
+    space's marginals (None: uniform on the box)."""
 
     names: list[str]
     lower: np.ndarray
@@ -32,6 +39,7 @@ class TrainingSet:
     x: np.ndarray
     y: np.ndarray
     outputs: OutputIndex
+    inputs: list[Marginal] | None = None
 
 
 def design_points(design: xr.Dataset, names: list[str], lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -63,4 +71,16 @@ def training_set(space: xr.Dataset, design: xr.Dataset, responses: xr.Dataset, v
                              f"design {x.shape[0]} points")
     responses, kept = drop_failed(responses, "surrogate data")
     y, outputs = stack_outputs(responses, variables, experiments)
-    return TrainingSet(names, lower, upper, x[kept], y, outputs)
+    return TrainingSet(names, lower, upper, x[kept], y, outputs, space_marginals(space, names, lower, upper))
+
+
+def space_marginals(space: xr.Dataset, names: list[str], lower: np.ndarray, upper: np.ndarray) -> list[Marginal] | None:
+    """The marginals a parameter ``space`` records (None when it records none), each with support [lower, upper]."""
+    inputs = marginals_from_dataset(space, "surrogate data: the parameter space")
+    for name, marginal, lo, hi in zip(names, inputs or [], lower, upper):
+        if marginal.support != (lo, hi):
+            raise ParameterError(f"surrogate data: parameter {name!r} of the space has the distribution {marginal!r} "
+                                 f"with support {marginal.support_text()}, not the space's range [{lo:g}, {hi:g}]; "
+                                 f"a space's marginals must live on its range (uniform, truncated_normal or beta "
+                                 f"with lower/upper = the range)")
+    return inputs
