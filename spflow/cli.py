@@ -30,30 +30,33 @@ import json
 import shlex
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from spflow.core.console import console_logging
 from spflow.core.errors import SpflowError, StageError
-from spflow.core.executor import run, status
-from spflow.core.hashing import canonical_hash
-from spflow.core.dag_svg import dag_svg
-from spflow.core.html_report import Section, provenance_rows, sections_from, write_html_report
-from spflow.core.overrides import apply_overrides
-from spflow.core.pipeline import Pipeline
 from spflow.core.pipeline_registry import available_pipelines, builtin_pipeline_dir, load_pipeline_module
 from spflow.core.plugins import get_commands, get_registry
 from spflow.core.report_table import text_lines
 from spflow.core.runners import BACKENDS
-from spflow.study.pipeline_inputs import resolve_study, study_settings
+
+if TYPE_CHECKING:
+    from spflow.core.pipeline import Pipeline
+
+# The executor, the pipeline graph (networkx), hashing, the HTML report and the study reader are imported by the
+# verbs that use them, so that `spflow list` does not load them (docs/architecture.md, "Cheap verbs stay cheap").
 
 
 def _takes(obj, name: str) -> bool:
     """Whether ``obj`` is a pipeline builder (a function) taking the argument ``name``."""
+    from spflow.core.pipeline import Pipeline
+
     return callable(obj) and not isinstance(obj, Pipeline) and name in inspect.signature(obj).parameters
 
 
 def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False, **given: Any) -> Pipeline:
     """The module's pipeline, built with ``quick`` and the ``given`` builder arguments that are not ``None``."""
+    from spflow.core.pipeline import Pipeline
+
     obj = namespace.get("pipeline")
     if quick and not _takes(obj, "quick"):
         raise SpflowError(f"pipeline {spec!r} has no quick profile (its pipeline() takes no 'quick' argument)")
@@ -71,9 +74,13 @@ def _pipeline_from(namespace: dict[str, Any], spec: str, quick: bool = False, **
 def _load(args: argparse.Namespace) -> tuple[dict[str, Any], Pipeline, list[str]]:
     """The pipeline module's namespace, its pipeline with the ``--set`` overrides applied (validated before any
     work), and the run settings (which module was used, each override), printed here and recorded in the report."""
+    from spflow.core.overrides import apply_overrides
+
     loaded = load_pipeline_module(args.pipeline)
     study = None
     if args.study is not None or _takes(loaded.namespace.get("pipeline"), "study"):
+        from spflow.study.pipeline_inputs import resolve_study, study_settings
+
         study = resolve_study(args.study)  # validated before any work; None -> the bundled study
     pipe = _pipeline_from(loaded.namespace, args.pipeline, args.quick, study=study,
                           profile=args.profile)
@@ -92,6 +99,8 @@ def _load(args: argparse.Namespace) -> tuple[dict[str, Any], Pipeline, list[str]
 def _report_fingerprint(namespace: dict[str, Any], result, settings: list[str]) -> str:
     """What a report depends on: every node's key, the run settings and the pipeline modules' sources (the file, its
     siblings and the built-in pipelines, which other pipelines include)."""
+    from spflow.core.hashing import canonical_hash
+
     module_file = namespace.get("__file__")
     directories = {builtin_pipeline_dir(), *([Path(module_file).resolve().parent] if module_file else [])}
     sources = {str(path): path.read_text() for directory in directories for path in sorted(directory.glob("*.py"))}
@@ -105,6 +114,9 @@ def _write_report(namespace: dict[str, Any], pipe: Pipeline, result, args: argpa
 
     With ``reuse`` (``spflow run`` when nothing executed), a report written for the same node keys, settings and
     pipeline sources is kept and its lines reprinted instead of redrawing every figure."""
+    from spflow.core.dag_svg import dag_svg
+    from spflow.core.html_report import Section, provenance_rows, sections_from, write_html_report
+
     report = namespace.get("report")
     outdir = Path(args.out or Path("out") / pipe.name)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -142,6 +154,10 @@ def _flat(lines) -> list[str]:
 def _write_failure_report(pipe: Pipeline, args: argparse.Namespace, settings: list[str], error: StageError) -> None:
     """``report.html`` of a failed run: the run settings, the failure as a warning, the DAG with the failed node,
     the nodes whose results are in the cache and those not run."""
+    from spflow.core.dag_svg import dag_svg
+    from spflow.core.executor import status
+    from spflow.core.html_report import Section, write_html_report
+
     outdir = Path(args.out or Path("out") / pipe.name)
     outdir.mkdir(parents=True, exist_ok=True)
     stored = {r.node for r in status(pipe, cache=args.cache) if r.fresh}
@@ -158,6 +174,8 @@ def _write_failure_report(pipe: Pipeline, args: argparse.Namespace, settings: li
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from spflow.core.executor import run
+
     namespace, pipe, settings = _load(args)
     try:
         result = run(pipe, cache=args.cache, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
@@ -172,6 +190,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
+    from spflow.core.executor import run, status
+
     namespace, pipe, settings = _load(args)
     stale = [r.node for r in status(pipe, cache=args.cache) if not r.fresh]
     if stale:
@@ -187,6 +207,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_status(args: argparse.Namespace) -> int:
+    from spflow.core.executor import status
+
     _, pipe, _ = _load(args)
     rows = status(pipe, cache=args.cache)
     width = max(len(r.node) for r in rows)

@@ -3,9 +3,9 @@ bundles UDUNITS-2) as the judge of what a unit string means.
 
 A numeric variable passes with a ``units`` string UDUNITS parses — except strings UDUNITS reads as something else than
 spflow meant (``PV`` is petavolt, ``nat`` nano technical atmospheres, ``-`` no unit at all) — or, when
-``per_element`` is allowed, with no ``units`` but ``units_variable`` naming a string variable along one of its dims
-whose every entry passes the same test. String and boolean variables need no units. Every variable needs a non-empty
-``long_name`` when ``long_names`` is asked for.
+``per_element`` is allowed, with no ``units`` but ``units_variable`` naming a string variable along one or more of its
+dims (a covariance's: both) whose every entry passes the same test. String and boolean variables need no units.
+Every variable needs a non-empty ``long_name`` when ``long_names`` is asked for.
 """
 
 from __future__ import annotations
@@ -48,10 +48,10 @@ def variable_problems(ds: xr.Dataset, name: str, *, per_element: bool = True, lo
     if holder is None or not per_element:
         return problems + [f"{name}: no units"]
     units = ds.variables.get(holder)
-    if units is None or units.ndim != 1 or units.dims[0] not in var.dims or units.dtype.kind not in "UO":
-        return problems + [f"{name}: units_variable {holder!r} is not a string variable along one of {var.dims}"]
-    return problems + [f"{name}: entry of {holder}: {why}" for why in map(unit_problem, np.asarray(units.values))
-                       if why]
+    if units is None or units.ndim < 1 or not set(units.dims) <= set(var.dims) or units.dtype.kind not in "UO":
+        return problems + [f"{name}: units_variable {holder!r} is not a string variable along some of {var.dims}"]
+    return problems + [f"{name}: entry of {holder}: {why}"
+                       for why in map(unit_problem, np.asarray(units.values).ravel()) if why]
 
 
 def dataset_problems(ds: xr.Dataset, **kwargs) -> list[str]:

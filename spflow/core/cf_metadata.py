@@ -6,10 +6,12 @@ The convention (docs/architecture.md, "Units and CF metadata"):
   - ``units``: a UDUNITS-2 string, ``"1"`` when dimensionless (injected pore volumes, fractions, log densities,
     counts and scores are ``"1"``), or
   - units per element: no ``units`` attribute, and ``units_variable`` naming a string variable of the same Dataset
-    along one of the variable's dimensions whose entries are the UDUNITS units of the slices — for a vector whose
-    entries are different quantities (the parameter vector θ: exponents, a viscosity, a dispersivity; the noise
-    levels σ_i of blocks in Pa and in 1). CF has no attribute for this (CF-1.10 §3.1 wants the unit on the
-    variable), so a CF reader sees such a variable without units; a file holding one does not claim CF;
+    along one or more of the variable's dimensions whose entries are the UDUNITS units of the slices — for a vector
+    whose entries are different quantities (the parameter vector θ: exponents, a viscosity, a dispersivity; the noise
+    levels σ_i of blocks in Pa and in 1), or a matrix whose entries are products of two such units (the covariance
+    of a lab fit's estimates: a units variable over both of its dims, :func:`product_unit`). CF has no attribute
+    for this (CF-1.10 §3.1 wants the unit on the variable), so a CF reader sees such a variable without units; a
+    file holding one does not claim CF;
 * string and boolean variables carry no units;
 * every variable carries a ``long_name`` (CF-1.10 §3.2).
 
@@ -25,7 +27,8 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["CONVENTIONS", "UNITS_VARIABLE", "NO_UDUNITS_FORM", "udunits", "claims_cf", "has_units_per_element"]
+__all__ = ["CONVENTIONS", "UNITS_VARIABLE", "NO_UDUNITS_FORM", "udunits", "product_unit", "squared_unit",
+           "claims_cf", "has_units_per_element"]
 
 #: The ``Conventions`` attribute of a file whose variables all carry UDUNITS ``units`` and a ``long_name``.
 CONVENTIONS = "CF-1.10"
@@ -56,6 +59,25 @@ def udunits(unit: str) -> str:
     return _NOTATION.get(unit, unit)
 
 
+def product_unit(a: str, b: str) -> str:
+    """The UDUNITS unit of a product of quantities in units ``a`` and ``b`` (UDUNITS strings): ``"1"`` drops out,
+    equal units give ``"(a)^2"``, others ``"(a)*(b)"`` (parenthesised, so ``"1/s"`` times ``"cpoise"`` stays
+    ``"(1/s)*(cpoise)"``). A covariance of estimates in units ``a`` and ``b`` is in ``product_unit(a, b)``, a variance
+    in ``squared_unit(a)``. Logarithmic units (``lg(re 1 ...)``) have no product in UDUNITS: the string is built
+    anyway and the units check rejects it."""
+    a, b = str(a).strip(), str(b).strip()
+    if a == "1":
+        return b
+    if b == "1":
+        return a
+    return f"({a})^2" if a == b else f"({a})*({b})"
+
+
+def squared_unit(unit: str) -> str:
+    """The UDUNITS unit of the square of a quantity in ``unit`` (``"1"`` stays ``"1"``, ``"Pa"`` is ``"(Pa)^2"``)."""
+    return product_unit(unit, unit)
+
+
 def claims_cf(ds) -> bool:
     """Whether ``ds`` may claim :data:`CONVENTIONS`: every variable has a ``long_name``, every numeric one a
     ``units`` string not in the catalogue notation :func:`udunits` rewrites nor in :data:`NO_UDUNITS_FORM` (no units
@@ -75,8 +97,9 @@ def claims_cf(ds) -> bool:
 
 def has_units_per_element(ds, name: str) -> bool:
     """Whether variable ``name`` of ``ds`` has units per element: no ``units``, and ``units_variable`` naming a
-    string variable of ``ds`` along one of its dimensions (what the entries are is for a units library to judge)."""
+    string variable of ``ds`` along one or more of its dimensions (one: a unit per parameter; two: a unit per pair
+    of parameters, as a covariance's). What the entries are is for a units library to judge."""
     var = ds.variables[name]
     holder = ds.variables.get(var.attrs.get(UNITS_VARIABLE))
-    return ("units" not in var.attrs and holder is not None and holder.ndim == 1 and holder.dtype.kind in "UO"
-            and holder.dims[0] in var.dims)
+    return ("units" not in var.attrs and holder is not None and holder.ndim >= 1 and holder.dtype.kind in "UO"
+            and set(holder.dims) <= set(var.dims))

@@ -36,7 +36,7 @@ class SpflowHookSpecs:
     def spflow_register_stages(self, register):
         """Contribute stage classes: call ``register(StageSubclass)`` for each, or ``register("package.module:Class",
         name="stage_name")`` to declare one without importing its module (imported when the stage is first used, and
-        then checked to be a Stage subclass with that ``name``; :mod:`spflow.core.stage_table`).
+        then checked to be a Stage subclass with that ``name``; :mod:`spflow.core.class_table`).
 
         .. versionadded:: 0.1
         .. versionchanged:: 0.2 stages may be registered by reference.
@@ -69,11 +69,14 @@ class SpflowHookSpecs:
     @hookspec
     def spflow_register_surrogate_kinds(self, register):
         """Contribute surrogate kinds: ``register(SurrogateSubclass)`` for each, a subclass of
-        :class:`spflow.plugins.surrogates.contract.Surrogate` with a unique class attribute ``kind``. A stored surrogate
+        :class:`spflow.plugins.surrogates.contract.Surrogate` with a unique class attribute ``kind``, or
+        ``register("package.module:Class", kind="kind_name")`` to declare one without importing its module (imported
+        when a surrogate of the kind is first loaded, then checked; :mod:`spflow.core.class_table`). A stored surrogate
         whose ``attrs["surrogate"]`` names that kind is then rebuilt by its ``from_dataset`` wherever spflow loads one
         (:func:`~spflow.plugins.surrogates.contract.load_surrogate`: validation, calibration, MCMC, figures).
 
         .. versionadded:: 0.2
+        .. versionchanged:: 0.2 surrogate kinds may be registered by reference.
         """
 
     @hookspec

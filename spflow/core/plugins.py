@@ -36,7 +36,7 @@ from . import hashing
 from .errors import PipelineError, PluginError, PluginWarning, SchemaError
 from .hookspecs import PROJECT_NAME, SpflowHookSpecs
 from .stage import Stage
-from .stage_table import StageTable, class_path, is_reference
+from .class_table import StageTable, SurrogateKindTable, class_path, is_reference
 
 __all__ = ["Registry", "Command", "get_registry", "get_commands", "reset_registry", "plugin_manager", "register_plugin",
            "unregister_plugin"]
@@ -56,7 +56,7 @@ class Registry:
 
     stages: StageTable = field(default_factory=StageTable)
     effects: dict[str, Any] = field(default_factory=dict)
-    surrogate_kinds: dict[str, type] = field(default_factory=dict)
+    surrogate_kinds: SurrogateKindTable = field(default_factory=SurrogateKindTable)
     providers: dict[str, str] = field(default_factory=dict)
     #: Calls a lifecycle hook of every plugin: ``registry.notify("spflow_node_end", node=..., ...)``.
     notify: Callable[..., None] = field(default=lambda hookname, **kwargs: None, repr=False)
@@ -216,7 +216,7 @@ def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Re
     reg = Registry(notify=_Notifier(pm, third_party))
 
     def register_stage(cls: Any, name: str | None = None) -> None:
-        if is_reference(cls):  # "module:Class": imported when the stage is first used (spflow.core.stage_table)
+        if is_reference(cls):  # "module:Class": imported when the stage is first used (spflow.core.class_table)
             if not (isinstance(name, str) and name):
                 raise PluginError(f"spflow_register_stages: a stage registered by reference ({cls!r}) needs "
                                   "name='<stage name>'")
@@ -248,17 +248,25 @@ def _build_registry(pm: pluggy.PluginManager, third_party: dict[str, str]) -> Re
         reg.effects[name] = effect
         reg.providers["effect:" + name] = _provider_name(effect)
 
-    def register_surrogate_kind(cls: Any) -> None:
-        kind = getattr(cls, "kind", None)
-        if not (isinstance(cls, type) and callable(getattr(cls, "from_dataset", None))):
-            raise PluginError(f"spflow_register_surrogate_kinds: expected a Surrogate subclass, got {cls!r}")
-        if not isinstance(kind, str) or not kind:
-            raise PluginError(f"surrogate class {cls.__qualname__} must set a non-empty class attribute 'kind'")
-        if kind in reg.surrogate_kinds and reg.surrogate_kinds[kind] is not cls:
+    def register_surrogate_kind(cls: Any, kind: str | None = None) -> None:
+        if is_reference(cls):  # "module:Class": imported when a surrogate of the kind is first loaded
+            if not (isinstance(kind, str) and kind):
+                raise PluginError(f"spflow_register_surrogate_kinds: a surrogate kind registered by reference "
+                                  f"({cls!r}) needs kind='<kind name>'")
+            path, provider = cls, cls.partition(":")[0]
+        else:
+            kind = getattr(cls, "kind", None)
+            if not SurrogateKindTable.accepts(cls):
+                raise PluginError(f"spflow_register_surrogate_kinds: expected a Surrogate subclass or a "
+                                  f"'module:Class' reference with kind=..., got {cls!r}")
+            if not isinstance(kind, str) or not kind:
+                raise PluginError(f"surrogate class {cls.__qualname__} must set a non-empty class attribute 'kind'")
+            path, provider = class_path(cls), _provider_name(cls)
+        if kind in reg.surrogate_kinds and reg.surrogate_kinds.path(kind) != path:
             raise PluginError(f"surrogate kind {kind!r} registered twice: by {reg.providers['surrogate:' + kind]} "
-                              f"and by {_provider_name(cls)}")
-        reg.surrogate_kinds[kind] = cls
-        reg.providers["surrogate:" + kind] = _provider_name(cls)
+                              f"and by {provider}")
+        reg.surrogate_kinds.add(kind, cls)
+        reg.providers["surrogate:" + kind] = provider
 
     _call_hook(pm, third_party, "spflow_register_stages", register_stage)
     _call_hook(pm, third_party, "spflow_register_effects", register_effect)

@@ -38,8 +38,8 @@ class Variable:
     variable optional, but when present it must match. Float variables must be finite unless ``allow_nan``.
     ``units_variable`` declares units that differ along a dimension (:mod:`spflow.core.cf_metadata`): the variable
     has no ``units`` attribute but ``attrs["units_variable"]`` naming that string variable, which must exist along
-    one of the variable's dims. ``long_name`` is the CF ``long_name`` the variable is written with
-    (:meth:`DatasetSchema.annotate`).
+    one or more of the variable's dims (a covariance's units variable runs along both of its dims). ``long_name`` is
+    the CF ``long_name`` the variable is written with (:meth:`DatasetSchema.annotate`).
     """
 
     dims: tuple[str, ...] | None
@@ -108,7 +108,7 @@ class DatasetSchema:
         if not has_units_per_element(ds, name):
             units = ds.variables.get(expected)
             raise SchemaError(f"{where} variable {name!r}: units per element need no attrs['units'] (found "
-                              f"{ds[name].attrs.get('units')!r}) and {expected!r} a string variable along one of its "
+                              f"{ds[name].attrs.get('units')!r}) and {expected!r} a string variable along some of its "
                               f"dims {tuple(ds[name].dims)} (found "
                               f"{None if units is None else (units.dims, str(units.dtype))})")
 

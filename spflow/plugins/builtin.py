@@ -46,14 +46,19 @@ def spflow_register_stages(register):
         register(reference, name=name)
 
 
+#: Built-in surrogate kinds, registered by reference: a kind's module (the Kriging ones import SciPy's linear
+#: algebra) loads when a surrogate of that kind is first rebuilt, not when the registry is built.
+SURROGATE_KINDS = {
+    "pce": "spflow.plugins.surrogates.pce_model:PCE",
+    "gp": "spflow.plugins.surrogates.gp_model:GP",
+    "pck": "spflow.plugins.surrogates.pck_model:PCK",
+}
+
+
 @hookimpl
 def spflow_register_surrogate_kinds(register):
-    from spflow.plugins.surrogates.gp_model import GP
-    from spflow.plugins.surrogates.pce_model import PCE
-    from spflow.plugins.surrogates.pck_model import PCK
-
-    for kind in (PCE, GP, PCK):
-        register(kind)
+    for kind, reference in SURROGATE_KINDS.items():
+        register(reference, kind=kind)
 
 
 @hookimpl

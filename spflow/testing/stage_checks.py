@@ -77,7 +77,7 @@ STAGE_CHECKS = {c.name: c for c in (
           "make run() produce every declared variable with the declared dims, dtype kind, units and finiteness, or "
           "correct the declaration (allow_nan=True for documented NaN)"),
     Check("output_units", "every numeric data variable of the result has a 'units' attribute (or units per element: "
-          "'units_variable' naming a string variable of units along one of its dims, docs/architecture.md)",
+          "'units_variable' naming a string variable of units along some of its dims, docs/architecture.md)",
           "set attrs['units'] to a UDUNITS string on each numeric variable ('1' for dimensionless)"),
     Check("purity", "run() leaves its inputs unchanged", "work on copies (ds.copy(deep=True)) or build new arrays; "
           "never assign into input arrays or their attrs"),

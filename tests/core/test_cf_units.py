@@ -19,30 +19,10 @@ from spflow.core.cf_metadata import CONVENTIONS, NO_UDUNITS_FORM, claims_cf, udu
 from spflow.core.plugins import get_registry
 
 #: (schema doc, variable) -> why its declared units are not UDUNITS yet.
-_BOX = "units per parameter, but the Dataset carries no unit variable (or hand-built inputs in the tests have none)"
 NOT_YET = {
-    ("a fitted surrogate (see attrs['surrogate'] for its kind)", "lower"): _BOX,
-    ("a fitted surrogate (see attrs['surrogate'] for its kind)", "upper"): _BOX,
-    ("design points", "values"): _BOX,
-    ("gap report: localisation, candidate scores, verdict, gap closed", "delta_elpd"):
-        "'nat' (nano technical atmosphere in UDUNITS); the gap stage's writer is another branch's",
-    ("gap report: localisation, candidate scores, verdict, gap closed", "theta"): _BOX,
-    **{("lab fit: estimates, standard errors and covariance of sub-model parameters", v): _BOX
-       for v in ("estimate", "std", "profile_lower", "profile_upper")},
-    ("lab fit: estimates, standard errors and covariance of sub-model parameters", "covariance"):
-        "units per pair of parameters: the convention covers one dimension",
-    **{(doc, v): _BOX for doc in ("screening result", "Sobol' indices per QoI and parameter, selection and screened "
-                                  "space", "Morris mu, mu*, sigma per QoI and parameter, selection and screened space")
-       for v in ("lower", "upper", "default")},
-    **{(doc, "variance"): "QoI units squared per QoI: no units variable of squared units"
-       for doc in ("screening result", "Sobol' indices per QoI and parameter, selection and screened space",
-                   "Morris mu, mu*, sigma per QoI and parameter, selection and screened space")},
-    **{("Morris mu, mu*, sigma per QoI and parameter, selection and screened space", v):
-       "QoI units per parameter range: a ratio of two per-element units" for v in ("mu", "mu_star", "mu_star_conf",
-                                                                                     "sigma")},
-    **{("EEIHV slug-size design: evaluations, projected Pareto front, front uncertainty and knee design (§4.7)", v):
-       "units per design variable / objective: the writer's unit variables are prose" for v in
-       ("design", "observed", "projected", "knee_projected")},
+    ("design points", "values"):
+        "what the stages taking a design accept: a design a user gives (Pipeline.add_data, load_netcdf) may carry no "
+        "units; the stages drawing one write 'design points with the units of their columns'",
 }
 
 
@@ -162,7 +142,38 @@ def test_the_schema_accepts_units_per_element_only_in_the_documented_form():
     for bad, why in ((good.assign(x=("p", [1.0, 2.0])), "expected attrs\\['units_variable'\\] = 'u'"),
                      (good.assign(x=("p", [1.0, 2.0], {"units_variable": "u", "units": "m"})), "found 'm'"),
                      (good.drop_vars("u"), "found None\\)"),
-                     (good.assign(u=("q", ["m", "s"])), "along one of its dims")):
+                     (good.assign(u=("q", ["m", "s"])), "along some of its dims")):
         with pytest.raises(SchemaError, match=why):
             schema.validate(bad, stage="t", port="out")
     assert schema.annotate(good.assign(x=("p", [1.0, 2.0])))["x"].attrs == {"long_name": "x", "units_variable": "u"}
+
+
+def test_units_per_pair_of_parameters_in_a_two_dimensional_units_variable():
+    from spflow.core.cf_metadata import has_units_per_element
+    from spflow.core.errors import SchemaError
+    from spflow.core.schema import DatasetSchema, Variable
+
+    schema = DatasetSchema(variables={"cov": Variable(("p", "q"), units_variable="cu", long_name="c")})
+    cov = xr.Dataset({"cov": (("p", "q"), np.eye(2), {"units_variable": "cu", "long_name": "c"}),
+                      "cu": (("p", "q"), [["(Pa)^2", "Pa s"], ["Pa s", "s^2"]], {"long_name": "u"})},
+                     coords={"p": ("p", ["a", "b"], {"long_name": "p"}), "q": ("q", ["a", "b"], {"long_name": "q"})})
+    schema.validate(cov, stage="t", port="out")
+    assert has_units_per_element(cov, "cov") and dataset_problems(cov) == []
+    typo = cov.assign(cu=(("p", "q"), [["(Pa)^2", "Pa s"], ["Pa s", "PV"]], {"long_name": "u"}))
+    assert dataset_problems(typo) == ["cov: entry of cu: units 'PV' reads as petavolt in UDUNITS"]
+    elsewhere = cov.assign(cu=(("p", "r"), [["m", "s"], ["m", "s"]]))  # a dim the covariance does not have
+    assert not has_units_per_element(elsewhere, "cov")
+    with pytest.raises(SchemaError, match="along some of its dims"):
+        schema.validate(elsewhere, stage="t", port="out")
+
+
+@pytest.mark.parametrize("a, b, meaning", [("cpoise", "1/percent", "mPa s/percent"), ("1", "Pa", "Pa"),
+                                           ("Pa", "1", "Pa"), ("1/s", "1/s", "s-2"), ("1", "1", "1"),
+                                           ("m/s", "m", "m2 s-1")])
+def test_product_of_two_units_is_the_udunits_product(a, b, meaning):
+    import cf_units
+
+    from spflow.core.cf_metadata import product_unit, squared_unit
+
+    assert cf_units.Unit(product_unit(a, b)) == cf_units.Unit(meaning)
+    assert cf_units.Unit(squared_unit(a)) == cf_units.Unit(a) ** 2

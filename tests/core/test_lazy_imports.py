@@ -16,15 +16,24 @@ REPO = Path(__file__).resolve().parents[2]
 #: What an ``import spflow`` or a ``spflow list`` must not load (each costs 0.1-1 s to import).
 HEAVY = ("numba", "pymoo", "GPy", "chaospy", "SALib", "arviz", "matplotlib", "emcee", "sklearn", "moocore",
          "scipy.optimize")
+#: What ``spflow list`` does not need either (it imports xarray, through the stages' schemas, and nothing heavier):
+#: SciPy (Kriging's linear algebra, the slug design's constants), joblib (the slug design's parallel map),
+#: networkx (the pipeline graph), dask and the executor. (It imports the surrogate kinds' classes, for their
+#: descriptions: light, since they import SciPy when a model is fitted.)
+NOT_FOR_LIST = ("scipy", "joblib", "networkx", "dask", "spflow.core.executor")
+#: What ``spflow status`` on a pipeline without Kriging does not need: the Kriging modules (surrogate kinds are
+#: registered by reference), SciPy's linear algebra they import, joblib and the stages its pipeline does not use.
+NOT_FOR_STATUS = ("joblib", "scipy.linalg", "spflow.plugins.surrogates.gp_model", "spflow.plugins.surrogates.pck_model",
+                  "spflow.plugins.surrogates.kriging", "spflow.plugins.slug_design.stage")
 
 
-def loaded_after(body: str) -> dict:
-    """Run ``body`` in a fresh interpreter (this worktree first on the path) and return which HEAVY modules it left
-    in ``sys.modules``, plus what ``body`` stored in the variable ``result``."""
+def loaded_after(body: str, look_for: tuple[str, ...] = HEAVY, cwd: Path = REPO) -> dict:
+    """Run ``body`` in a fresh interpreter (this worktree first on the path, in ``cwd``) and return which of the
+    modules ``look_for`` it left in ``sys.modules`` (as ``heavy``), plus what ``body`` stored in ``result``."""
     code = (f"import io, json, sys, contextlib\nresult = None\n{body}\n"
-            f"print(json.dumps({{'heavy': [m for m in {HEAVY!r} if m in sys.modules], 'result': result}}))")
+            f"print(json.dumps({{'heavy': [m for m in {look_for!r} if m in sys.modules], 'result': result}}))")
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    out = subprocess.run([sys.executable, "-c", code], env=env, cwd=REPO, capture_output=True, text=True, timeout=600)
+    out = subprocess.run([sys.executable, "-c", code], env=env, cwd=cwd, capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -45,7 +54,7 @@ def test_import_spflow_loads_no_heavy_library():
 def test_spflow_list_loads_no_heavy_library_and_lists_every_stage(what):
     body = ("from spflow.cli import main\nbuf = io.StringIO()\nwith contextlib.redirect_stdout(buf):\n"
             f"    main(['list', {what!r}])\nresult = buf.getvalue()")
-    probe = loaded_after(body)
+    probe = loaded_after(body, HEAVY + NOT_FOR_LIST)
     assert probe["heavy"] == []
     if what in ("all", "stages"):  # complete: every registered stage, each with its params and ports
         from spflow.core.plugins import get_registry
@@ -90,3 +99,57 @@ def test_status_imports_only_the_stage_modules_its_pipeline_uses(tmp_path):
     assert not [m for m in modules if m.startswith(("spflow.plugins.calibration", "spflow.plugins.slug_design",
                                                     "spflow.plugins.lab", "spflow.plugins.screening",
                                                     "spflow.plugins.gap"))], modules
+
+
+def test_cli_status_of_a_cached_pipeline_loads_only_what_its_stages_need(tmp_path):
+    import spflow
+
+    (tmp_path / "pipelines").mkdir()
+    (tmp_path / "pipelines" / "two.py").write_text(
+        "import spflow\n\ndef pipeline():\n    p = spflow.Pipeline('two')\n"
+        "    p.add('space', 'parameter_space', params={'names': ['CRK', 'AD41']})\n"
+        "    p.add('design', 'lhs_design', inputs={'space': 'space'}, params={'samples': 4})\n    return p\n")
+    namespace = {}
+    exec((tmp_path / "pipelines" / "two.py").read_text(), namespace)
+    spflow.run(namespace["pipeline"](), cache=tmp_path / ".spflow", verbose=False)
+    body = ("from spflow.cli import main\nbuf = io.StringIO()\nwith contextlib.redirect_stdout(buf):\n"
+            "    main(['status', 'two'])\nresult = buf.getvalue()")
+    probe = loaded_after(body, HEAVY + NOT_FOR_STATUS, cwd=tmp_path)
+    assert probe["heavy"] == []
+    assert [line.split()[-1] for line in probe["result"].splitlines()[1:]] == ["fresh", "fresh"]  # both cached
+
+
+def test_a_surrogate_kind_registered_by_reference_is_imported_on_use_and_checked():
+    import spflow
+    from spflow.core.errors import PluginError
+
+    class References:
+        @spflow.hookimpl
+        def spflow_register_surrogate_kinds(self, register):
+            register("tests_core_surrogate_missing:Nothing", kind="toy_missing")
+            register("spflow.plugins.surrogates.gp_model:GP", kind="toy_miskinded")  # GP.kind is 'gp'
+
+    spflow.register_plugin(References(), "kind_references")
+    try:
+        kinds = spflow.get_registry().surrogate_kinds
+        assert {"toy_missing", "toy_miskinded", "pce", "gp", "pck"} <= set(kinds)  # declared, nothing imported yet
+        with pytest.raises(PluginError, match="surrogate kind 'toy_missing' is registered as "
+                                              "'tests_core_surrogate_missing:Nothing', which cannot be imported"):
+            kinds["toy_missing"]
+        with pytest.raises(PluginError, match="not a surrogate class \\(with from_dataset\\) of kind 'toy_miskinded'"):
+            kinds["toy_miskinded"]
+        assert kinds["gp"].kind == "gp"  # a built-in reference resolves to its class
+    finally:
+        spflow.unregister_plugin("kind_references")
+
+    class NoKind:
+        @spflow.hookimpl
+        def spflow_register_surrogate_kinds(self, register):
+            register("spflow.plugins.surrogates.gp_model:GP")
+
+    spflow.register_plugin(NoKind(), "kind_without_name")
+    try:
+        with pytest.raises(PluginError, match="registered by reference .* needs kind="):
+            spflow.get_registry()
+    finally:
+        spflow.unregister_plugin("kind_without_name")

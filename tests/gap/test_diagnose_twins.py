@@ -9,6 +9,7 @@ import pytest
 import xarray as xr
 
 from spflow.cli import main
+from spflow.core.cf_metadata import has_units_per_element
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext
 from spflow.plugins.gap.report import summary
@@ -51,11 +52,14 @@ def test_null_twin_is_not_flagged(tmp_path, capsys):
                  "--out", str(out)]) == 0
     result = json.loads((out / "summary.json").read_text())
     assert result["verdict"] == "none" and result["effects"] == [] and result["gap_cells"] == []
-    assert "verdict: none" in capsys.readouterr().out
+    printed = capsys.readouterr().out.splitlines()  # the verdict table as text: title, header, one row
+    verdict = printed.index("Verdict")
+    assert printed[verdict + 1].split()[0] == "verdict" and printed[verdict + 2].split()[0] == "none"
     for name in ("gap_heatmap", "fingerprint_angles", "candidates", "predictions", "pointwise_scores"):
         assert (out / f"{name}.png").stat().st_size > 10_000
     page = (out / "report.html").read_text()  # the HTML report: the verdict, the inputs, every figure inlined
-    assert "verdict: none" in page and cal in page and page.count("data:image/png;base64,") == 5
+    assert "<caption>Verdict</caption>" in page and "<tr><td>none</td>" in page and cal in page
+    assert page.count("data:image/png;base64,") == 5
     with xr.open_dataset(out / "gap_report.nc") as ds:
         assert summary(ds.load()) == result  # the summary is a function of the saved report alone
     # a noise-only misfit: the calibration chi2 is consistent with its degrees of freedom
@@ -95,8 +99,10 @@ def test_strong_capillary_pressure_twin_is_identified(tmp_path):
     assert all(c["slug"] in ("IWF", "HTDS", "SP", "P", "EWF") and c["pvalue"] < 0.01 for c in result["change_points"])
     # the final model's held-out predictive intervals cover at least as well as the base model's
     assert result["coverage"]["heldout_final"] >= result["coverage"]["heldout_base"]
-    # units in attrs everywhere
-    assert all("units" in report[v].attrs for v in report.data_vars if report[v].dtype.kind == "f")
+    # units in attrs everywhere (theta: units per parameter, in param_units)
+    assert all("units" in report[v].attrs or has_units_per_element(report, v) for v in report.data_vars
+               if report[v].dtype.kind == "f")
+    assert report["theta"].attrs["units_variable"] == "param_units"
     assert np.isfinite(report["fingerprint_cos"].values).all()
 
 

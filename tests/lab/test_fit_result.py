@@ -1,5 +1,6 @@
 """fit_least_squares against the closed form of (weighted) linear regression, computed here with numpy."""
 
+import cf_units
 import numpy as np
 import pytest
 from scipy import stats
@@ -17,7 +18,7 @@ def _line_data(seed=0, n=25):
 
 def test_matches_ordinary_least_squares_closed_form():
     x, y = _line_data()
-    fit = fit_least_squares(lambda t: t[0] + t[1] * x - y, [0.0, 0.0], names=["a", "b"], units=["cP", "cP/s"],
+    fit = fit_least_squares(lambda t: t[0] + t[1] * x - y, [0.0, 0.0], names=["a", "b"], units=["cP", "Pa/s"],
                             bounds=[(None, None), (-10.0, 10.0)], experiment="line", kind="test")
     X = np.column_stack([np.ones_like(x), x])
     beta = np.linalg.solve(X.T @ X, X.T @ y)
@@ -29,7 +30,12 @@ def test_matches_ordinary_least_squares_closed_form():
     np.testing.assert_allclose(fit["std"].values, np.sqrt(np.diag(cov)), rtol=1e-5)
     assert fit.attrs["dof"] == x.size - 2 and fit.attrs["n_points"] == x.size
     assert fit.attrs["rss"] == pytest.approx(resid @ resid, rel=1e-8)
-    assert fit.attrs["units_b"] == "cP/s" and list(fit["unit"].values) == ["cP", "cP/s"]
+    # units: as given in attrs, UDUNITS per parameter in 'unit' and per pair of parameters in 'covariance_units'
+    assert fit.attrs["units_a"] == "cP" and fit.attrs["units_b"] == "Pa/s"
+    products = [[cf_units.Unit(u) for u in row] for row in fit["covariance_units"].values]
+    assert [cf_units.Unit(u) for u in fit["unit"].values] == [cf_units.Unit("mPa s"), cf_units.Unit("Pa s-1")]
+    assert products == [[cf_units.Unit("mPa2 s2"), cf_units.Unit("mPa Pa")], [cf_units.Unit("mPa Pa"),
+                                                                              cf_units.Unit("Pa2 s-2")]]
     FIT.validate(fit, stage="test", port="out")
     lo, hi = fit_interval(fit, 0.95)
     q = stats.t.ppf(0.975, x.size - 2)

@@ -41,10 +41,12 @@ def fits():
 def _fit(names, estimates, stds):
     """A minimal FIT dataset (as a lab fit would return it)."""
     cov = np.diag(np.asarray(stds, dtype=float) ** 2)
-    ds = xr.Dataset({"estimate": ("param", np.asarray(estimates, dtype=float)),
-                     "std": ("param", np.asarray(stds, dtype=float)),
-                     "covariance": (("param", "param_"), cov),
-                     "unit": ("param", np.array(["-"] * len(names)))},
+    per_param = {"units_variable": "unit"}
+    ds = xr.Dataset({"estimate": ("param", np.asarray(estimates, dtype=float), per_param),
+                     "std": ("param", np.asarray(stds, dtype=float), per_param),
+                     "covariance": (("param", "param_"), cov, {"units_variable": "covariance_units"}),
+                     "unit": ("param", np.array(["1"] * len(names))),
+                     "covariance_units": (("param", "param_"), np.full((len(names), len(names)), "1"))},
                     coords={"param": list(names), "param_": list(names)},
                     attrs={"n_points": 10, "dof": 8, "rss": 1.0, "reduced_chi2": 0.1, "method": "test",
                            "kind": "test", "experiment": "test"})

@@ -20,13 +20,7 @@ EXCLUDED: dict[str, str] = {}
 
 #: Contract gaps the kit found in built-in stages and that are not fixed yet: stage -> the checks that fail. The test
 #: asserts exactly these fail, so a fix (or a new gap) shows up here.
-KNOWN_GAPS = {
-    # lab fits: estimate/std/covariance (and profile bounds, fit_ift's 'interface') have no units attr; their units
-    # are per parameter in the 'unit' variable and attrs units_<name> (fit_result.fit_least_squares)
-    **{name: {"output_units"} for name in ("fit_adsorption", "fit_desaturation", "fit_ift", "fit_me_viscosity",
-                                           "fit_phase_behaviour", "fit_polymer_coreflood", "fit_polymer_rheology",
-                                           "fit_tracer")},
-}
+KNOWN_GAPS: dict[str, set[str]] = {}
 
 
 class Small:

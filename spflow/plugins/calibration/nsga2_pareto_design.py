@@ -23,7 +23,7 @@ from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.calibration.nsga2_stage import NSGA2_CALIBRATION
 from spflow.plugins.design.parameter_map import ParameterMap
-from spflow.plugins.design.schemas import DESIGN
+from spflow.plugins.design.schemas import DESIGN_WITH_UNITS
 
 __all__ = ["ParetoDesign"]
 
@@ -33,7 +33,7 @@ class ParetoDesign(Stage):
     version = "3"
     description = "the Pareto sets of an nsga2_calibration at stored generations, as one design"
     inputs = {"calibration": NSGA2_CALIBRATION}
-    output = DESIGN
+    output = DESIGN_WITH_UNITS
     params = {
         "generations": Param(list, [0], bounds=(0, None),
                              doc="stored snapshot generations (see the calibration's 'snapshot'); 0 = the last one"),

@@ -57,7 +57,7 @@ from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.observations import OBSERVATIONS
-from spflow.plugins.surrogates.contract import SURROGATE, load_surrogate
+from spflow.plugins.surrogates.contract import STORED_SURROGATE, load_surrogate
 
 if TYPE_CHECKING:
     from spflow.plugins.calibration.nsga2_history import CalibrationHistory
@@ -129,7 +129,7 @@ class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
     version = "6"
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
-    inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
+    inputs = {"surrogate": STORED_SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
     params = {
         "training": Param(list, ["BCF1"], doc="experiments whose observations define the objectives (summed per "

@@ -8,7 +8,7 @@ import xarray as xr
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.parameter_map import ParameterMap
-from spflow.plugins.design.schemas import DESIGN, SPACE
+from spflow.plugins.design.schemas import DESIGN_WITH_UNITS, SPACE
 
 
 class LatinHypercubeDesign(Stage):
@@ -16,7 +16,7 @@ class LatinHypercubeDesign(Stage):
     version = "3"
     description = "Latin hypercube sample of a parameter space"
     inputs = {"space": SPACE}
-    output = DESIGN
+    output = DESIGN_WITH_UNITS
     params = {
         "samples": Param(int, 100, bounds=(1, 10_000_000), doc="number of design points"),
         "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="random seed"),

@@ -36,3 +36,14 @@ DESIGN = DatasetSchema(
     | MAP_VARIABLES,
     doc="design points",
 )
+
+#: A design a stage draws from a space or a calibration (``lhs_design``, ``pareto_design``): :data:`DESIGN` with
+#: ``unit`` required, so ``values`` has units per element. Stages that take a design accept :data:`DESIGN` (a
+#: design a user gives, ``Pipeline.add_data`` or ``load_netcdf``, may carry no units).
+DESIGN_WITH_UNITS = DatasetSchema(
+    dims=DESIGN.dims,
+    variables=DESIGN.variables | {
+        "values": Variable(("sample", "param"), units_variable="unit", long_name="design points"),
+        "unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each column")},
+    doc="design points with the units of their columns",
+)

@@ -13,7 +13,8 @@ the ``diagnose`` stage's options (``variables``, ``pv_step``, ``alpha``, ``short
 schedule and measurement chain) and the base model is the study's (``[parameters]``, ``[effects]``) on 60 cells; an
 optional ``--base`` file then gives only ``cells``, ``catalogue`` and ``[diagnosis]``. The study's summary and every
 default it took are printed first. Writes
-``gap_report.nc``, ``summary.json``, the figures and ``report.html`` (run settings, the verdict's lines, the figures,
+``gap_report.nc``, ``summary.json``, the figures and ``report.html`` (run settings, the verdict, candidate scores, gap
+closed and numerical-error scale as tables with units (:mod:`~spflow.plugins.gap.summary_tables`), the figures,
 software versions) into ``DIR`` (default ``out/diagnose``); when the verdict leaves
 two or more candidates in its ambiguity set, also the proposed next coreflood (``next_experiment.toml``, ``.json``,
 ``next_experiment_study.toml``; :mod:`~spflow.plugins.gap.next_after_diagnosis`), unless ``--no-next-experiment``.
@@ -31,6 +32,7 @@ from pathlib import Path
 from spflow.core.errors import ParameterError
 from spflow.core.html_report import Section, write_html_report
 from spflow.core.params import validate_params
+from spflow.core.report_table import text_lines
 from spflow.core.stage import StageContext
 
 __all__ = ["add_parser", "main"]
@@ -87,6 +89,7 @@ def main(args: argparse.Namespace) -> int:
     from .next_after_diagnosis import propose_next_experiment
     from .report import report_dataset, summary
     from .stage import OPTION_PARAMS, Diagnose
+    from .summary_tables import summary_items
 
     if args.study is None and (not args.observations or args.base is None):
         raise ParameterError("spflow diagnose needs --study STUDY, or --observations FILE ... with --base CONFIG")
@@ -119,31 +122,12 @@ def main(args: argparse.Namespace) -> int:
     result = summary(report)
     (out / "summary.json").write_text(json.dumps(result, indent=2))
     figures = write_figures(report, out)
-    lines = [f"verdict: {result['verdict']}" + (f"; ambiguity set {result['ambiguity_set']}"
-                                                if result["ambiguity_set"] else "")]
-    lines += [f"  effect {effect['name']}: fitted strength {effect['strength']:.4g}" for effect in result["effects"]]
-    if result["verdict"] in ("unattributed", "out_of_catalogue"):
-        lines.append(f"  the gap is real (chi2 {result['fit']['chi2_base']} on {result['fit']['dof']:g} dof) but not "
-                     "attributable to a catalogued mechanism; where: "
-                     + (", ".join(f"{c['variable']}:{c['experiment']}:{c['slug']}" for c in result["gap_cells"][:5])
-                        or "no single cell"))
-    tried = result["tried_not_declared"]
-    if tried:
-        lines.append("  tried, not declared: " + ", ".join(f"{t['name']} ({t['strength']:.3g})" for t in tried))
-    closed = result["gap_closed"]
-    lines.append(f"  gap closed: calibration {closed['calibration']}, held-out {closed['heldout']}; "
-                 f"{result['forward_runs']} forward runs, {seconds:.0f} s")
-    scale = (result["numerical_error"] or {}).get("scale")
-    if scale is not None:
-        lines.append(f"  numerical error in the error model: {scale['estimate']:.3g} x the spread of "
-                     f"{'; '.join(result['numerical_error']['variants'])} ({100 * scale['level']:.0f} % interval "
-                     f"{scale['lower']:.3g}-{scale['upper']:.3g}, cap {scale['maximum']:g}; estimated from the "
-                     "base model's calibration residuals)")
+    lines = summary_items(result, seconds)
     if args.next_experiment:
         proposal = propose_next_experiment(diag, out, parallel=ctx.parallel() if args.jobs > 1 else None)
         lines += proposal.lines() if proposal else ["next experiment: none proposed (no ambiguity set of two or "
                                                     "more candidates to separate)"]
-    for line in lines:
+    for line in text_lines(lines):
         print(line)
     html = write_html_report(out / "report.html", "spflow diagnose",
                              [Section("Run settings", settings), Section("Gap diagnosis", lines, figures)], [])

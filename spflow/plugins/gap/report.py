@@ -1,6 +1,7 @@
 """The gap report: a netCDF-able Dataset of a :class:`~spflow.plugins.gap.diagnosis.GapDiagnosis`, and its summary.
 
-Dataset layout (every variable has ``units``; mixed-unit tables name their units in a coordinate):
+Dataset layout (every variable has ``units``; mixed-unit tables name their units in a coordinate; log-density scores
+are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
 
 * series on (``model`` = base | final, ``experiment``, ``pv``): ``prediction_<qoi>``, ``std_<qoi>`` (predictive
   standard deviation), ``whitened_<qoi>``; ``observed_<qoi>`` on (``experiment``, ``pv``); ``role`` of each
@@ -18,7 +19,8 @@ Dataset layout (every variable has ``units``; mixed-unit tables name their units
 * ``candidate`` tables per greedy ``step``: ``screen_z``, ``snr``, ``absorbed``, ``fitted_strength``,
   ``delta_elpd`` (+ SEs), ``delta_elpd_loo`` (+ SE, ``pareto_k_max``; PSIS-LOO on the calibration data, reported
   only), ``gap_closed``, ``passes``; ``fingerprint_cos`` of the first step;
-* ``param`` table: ``theta`` per model and ``shift_fraction``;
+* ``param`` table: ``theta`` per model (units per parameter: ``param_units``, :mod:`spflow.core.cf_metadata`) and
+  ``shift_fraction``;
 * scalars and attrs: chi^2, p-value, gap-closed fractions, coverage, ELPD, the verdict and the ambiguity set;
   ``effects`` holds the *declared* effects only (verdict ``effect`` / ``ambiguous``), ``tried_not_declared`` every
   other refitted candidate with its single-effect strength; ``numerical_error`` (variants, forward runs, chi^2
@@ -38,6 +40,7 @@ import json
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE, udunits
 from spflow.plugins.forward.parameters import PARAMETERS
 from spflow.plugins.forward.run_arguments import common_grid
 
@@ -52,6 +55,16 @@ __all__ = ["report_dataset", "summary"]
 _UNITS = {"dp": "Pa", "oil_cut": "1", "recovery": "1", "c_polymer_out": "ppm", "c_surfactant_out": "ppm",
           "salinity_out": "ppm"}
 _SPEC_UNITS = {p.name: p.unit for p in PARAMETERS}
+#: Long names of the log-density scores. They are in nats (natural-log units), written ``units = "1"``: UDUNITS reads
+#: "nat" as nano technical atmospheres.
+_NATS = {k: {"long_name": v} for k, v in {
+    "delta_elpd": "change of expected log predictive density, candidate - reference (nats)",
+    "delta_elpd_se": "standard error of delta_elpd (nats)",
+    "delta_elpd_se_pointwise": "pointwise standard error of delta_elpd (nats)",
+    "delta_elpd_loo": "PSIS-LOO change of expected log predictive density (nats)",
+    "delta_elpd_loo_se": "standard error of delta_elpd_loo (nats)",
+    "elpd_base": "out-of-sample expected log predictive density of the base model (nats)",
+    "elpd_final": "out-of-sample expected log predictive density of the final model (nats)"}.items()}
 
 
 def _series_vars(g: GapDiagnosis, views: list[ModelView], grid: np.ndarray, positions: dict[str, np.ndarray]):
@@ -85,7 +98,8 @@ def _score_vars(g: GapDiagnosis, grid: np.ndarray, positions: dict[str, np.ndarr
         key = f"elpd_difference_{b.variable}"
         if key not in out:
             out[key] = (("experiment", "pv"), np.full((len(names), grid.size), np.nan),
-                        {"units": "nat", "long_name": f"pointwise out-of-sample lpd, final - base ({g.score_kind})"})
+                        {"units": "1", "long_name": f"pointwise out-of-sample lpd, final - base ({g.score_kind}; "
+                                                 "nats)"})
         out[key][1][names.index(b.experiment), positions[b.experiment][b.index]] = diff[s]
     return out
 
@@ -240,10 +254,8 @@ def _candidate_vars(g: GapDiagnosis):
     first = g.steps[0].screen
     order = [first.names.index(n) for n in names]
     cos = first.cos[np.ix_(order, order)]
-    units = {"fitted_strength": "effect strength (see spflow list effects)", "delta_elpd": "nat",
-             "delta_elpd_se": "nat", "delta_elpd_se_pointwise": "nat", "delta_elpd_loo": "nat",
-             "delta_elpd_loo_se": "nat"}
-    data = {k: (("step", "candidate"), v, {"units": units.get(k, "1")}) for k, v in tables.items()}
+    units = {"fitted_strength": "effect strength (see spflow list effects)"}
+    data = {k: (("step", "candidate"), v, {"units": units.get(k, "1"), **_NATS.get(k, {})}) for k, v in tables.items()}
     data |= {k: (("step", "candidate"), v, {"units": "1"}) for k, v in flags.items()}
     data["step_reference"] = ("step", [s.reference for s in g.steps])
     data["step_scored_against"] = ("step", [s.scored_against for s in g.steps])
@@ -271,9 +283,7 @@ def _scalars(g: GapDiagnosis):
         for model, v in (("base", g.base_view), ("final", g.final_view)):
             out[f"coverage_{label}_{model}"] = coverage(v.residual[rows], v.std[rows], g.options.interval) \
                 if rows.any() else float("nan")
-    units = {k: "1" for k in out}
-    units.update(elpd_base="nat", elpd_final="nat")
-    return {k: ((), float(v), {"units": units[k]}) for k, v in out.items()}
+    return {k: ((), float(v), {"units": "1", **_NATS.get(k, {})}) for k, v in out.items()}
 
 
 def report_dataset(g: GapDiagnosis) -> xr.Dataset:
@@ -293,8 +303,9 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
     params = g.base.parameters
     theta = np.array([g.base.values(g.base_fit.u), g.base.values(g.final_fit.u)])
     coords.update({"param": [p.label for p in params],
-                   "param_units": ("param", [_SPEC_UNITS[p.names[0]] for p in params])})
-    data["theta"] = (("model", "param"), theta, {"units": "see param_units"})
+                   "param_units": ("param", [udunits(_SPEC_UNITS[p.names[0]]) for p in params],
+                                   {"long_name": "UDUNITS unit of each calibrated parameter"})})
+    data["theta"] = (("model", "param"), theta, {UNITS_VARIABLE: "param_units"})
     data["shift_fraction"] = ("param", (theta[1] - theta[0]) / (g.base.upper - g.base.lower),
                               {"units": "1", "long_name": "parameter shift / range"})
     data.update(_scalars(g))

@@ -41,10 +41,12 @@ GAP_REPORT = DatasetSchema(
         "cell_chi2": Variable(("model", "cell"), units="1", long_name="chi-square of each residual cell"),
         "gap_rank": Variable(("cell",), kind="i", units="1", long_name="rank of the cell by misfit"),
         "screen_z": Variable(("step", "candidate"), units="1", allow_nan=True, long_name="screening z-score"),
-        "delta_elpd": Variable(("step", "candidate"), units="nat", allow_nan=True,
-                               long_name="change of expected log predictive density"),
+        "delta_elpd": Variable(("step", "candidate"), units="1", allow_nan=True,
+                               long_name="change of expected log predictive density (nats)"),
         "fingerprint_cos": Variable(("candidate", "candidate_b"), units="1", long_name="cosine of two fingerprints"),
-        "theta": Variable(("model", "param"), units=None, long_name="calibrated parameters of each model"),
+        "theta": Variable(("model", "param"), units_variable="param_units",
+                          long_name="calibrated parameters of each model"),
+        "param_units": Variable(("param",), kind="U", long_name="UDUNITS unit of each calibrated parameter"),
         "chi2_base": Variable((), units="1", long_name="chi-square of the base model"),
     },
     attrs=("verdict", "ambiguity_set", "effects", "final_model"),
@@ -104,7 +106,7 @@ def options_from(values: dict) -> Options:
 
 class Diagnose(Stage):
     name = "diagnose"
-    version = "5"
+    version = "6"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})

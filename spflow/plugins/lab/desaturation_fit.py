@@ -19,8 +19,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.plugins.forward.parameters import PARAMETERS
-from spflow.plugins.lab.fit_result import FitError, fit_least_squares
+from spflow.plugins.lab.fit_result import FitError, fit_least_squares, unit_variables
 from spflow.plugins.lab.lab_table import lab_meta, read_lab_table
 
 __all__ = ["KIND", "COLUMNS", "TAU", "phase_names", "desaturation_model", "read_desaturation_table",
@@ -134,10 +135,10 @@ def fit_desaturation(data: xr.Dataset, *, curve_points: int = 200) -> xr.Dataset
     units = [t_spec.unit, low_spec.unit, high_spec.unit]
     fit = xr.Dataset(
         {
-            "estimate": ("param", est),
-            "std": ("param", np.sqrt(np.diag(cov))),
-            "covariance": (("param", "param_"), cov),
-            "unit": ("param", np.array(units, dtype=str)),
+            "estimate": ("param", est, {UNITS_VARIABLE: "unit"}),
+            "std": ("param", np.sqrt(np.diag(cov)), {UNITS_VARIABLE: "unit"}),
+            "covariance": (("param", "param_"), cov, {UNITS_VARIABLE: "covariance_units"}),
+            **unit_variables(units),
         },
         coords={"param": list(names), "param_": list(names)},
         attrs={**raw.attrs, **{f"units_{k}": u for k, u in zip(names, units)}},

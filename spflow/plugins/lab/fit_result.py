@@ -30,33 +30,53 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE, product_unit, udunits
 from spflow.core.errors import SpflowError
 from spflow.core.schema import DatasetSchema, Variable
 
-__all__ = ["FitError", "FIT", "fit_least_squares", "fit_interval", "profile_interval", "stated_interval"]
+__all__ = ["FitError", "FIT", "unit_variables", "fit_least_squares", "fit_interval", "profile_interval",
+           "stated_interval"]
 
 #: Schema of every lab-fit stage output (extra variables on their own dims carry the data and the fitted curves).
+#: Estimates, standard errors and profile bounds have units per parameter (``unit``), the covariance units per pair
+#: of parameters (``covariance_units``), both UDUNITS (:mod:`spflow.core.cf_metadata`, :func:`unit_variables`).
 FIT = DatasetSchema(
     dims=("param",),
     variables={
-        "estimate": Variable(("param",), long_name="least-squares estimate",
-                             doc="least-squares estimate (units: attrs units_<name> / variable unit)"),
-        "std": Variable(("param",), long_name="standard error of the estimate",
+        "estimate": Variable(("param",), units_variable="unit", long_name="least-squares estimate",
+                             doc="least-squares estimate (units per parameter: variable unit)"),
+        "std": Variable(("param",), units_variable="unit", long_name="standard error of the estimate",
                         doc="standard error, sqrt of the covariance diagonal"),
-        "covariance": Variable(("param", "param_"), long_name="covariance of the estimates",
-                               doc="Gauss-Newton covariance s^2 (J^T J)^-1"),
-        "unit": Variable(("param",), kind="U", long_name="unit of each parameter", doc="unit of each parameter"),
-        "profile_lower": Variable(("param",), required=False, allow_nan=True,
+        "covariance": Variable(("param", "param_"), units_variable="covariance_units",
+                               long_name="covariance of the estimates", doc="Gauss-Newton covariance s^2 (J^T J)^-1"),
+        "unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each parameter",
+                         doc="UDUNITS unit of each parameter"),
+        "covariance_units": Variable(("param", "param_"), kind="U",
+                                     long_name="UDUNITS unit of each covariance entry",
+                                     doc="product of the units of the two parameters"),
+        "profile_lower": Variable(("param",), units_variable="unit", required=False, allow_nan=True,
                                   long_name="lower end of the profile-likelihood interval",
                                   doc="lower end of the profile-likelihood interval (attrs interval_level; -inf = "
                                       "not bounded by the data)"),
-        "profile_upper": Variable(("param",), required=False, allow_nan=True,
+        "profile_upper": Variable(("param",), units_variable="unit", required=False, allow_nan=True,
                                   long_name="upper end of the profile-likelihood interval",
                                   doc="upper end of the profile-likelihood interval (+inf = not bounded by the data)"),
     },
     attrs=("n_points", "dof", "rss", "reduced_chi2", "method", "kind", "experiment"),
     doc="lab fit: estimates, standard errors and covariance of sub-model parameters",
 )
+
+
+def unit_variables(units: Sequence[str]) -> dict[str, tuple]:
+    """The unit variables of a FIT dataset for parameters in ``units`` (the forward model's catalogue notation or
+    UDUNITS): ``unit`` (``param``), each parameter's UDUNITS unit (:func:`~spflow.core.cf_metadata.udunits`), and
+    ``covariance_units`` (``param``, ``param_``), the product of the units of each pair. A unit with no UDUNITS form
+    (``meq/ml``: :data:`~spflow.core.cf_metadata.NO_UDUNITS_FORM`) stays as written."""
+    unit = [udunits(u) for u in units]
+    return {"unit": ("param", np.array(unit, dtype=str), {"long_name": "UDUNITS unit of each parameter"}),
+            "covariance_units": (("param", "param_"), np.array([[product_unit(a, b) for b in unit] for a in unit],
+                                                                 dtype=str),
+                                 {"long_name": "UDUNITS unit of each covariance entry"})}
 
 
 class FitError(SpflowError, ValueError):
@@ -112,11 +132,12 @@ def fit_least_squares(
     ``residuals(theta)`` returns the 1-D array of ``(model - data) / scale``; ``x0``, ``names``, ``units`` and
     ``bounds`` (one ``(low, high)`` pair per parameter, ``None`` = unbounded) describe the parameters; ``sigma`` is
     a positive scalar or one value per residual (known noise standard deviation in the residual's scale).
-    Returns ``estimate``, ``std``, ``covariance`` and ``unit`` on dims ``param``/``param_`` with attrs
-    ``units_<name>``, ``n_points``, ``dof``, ``rss`` (weighted), ``reduced_chi2 = rss/dof``, ``noise``
-    ("estimated"/"known"), ``method``, ``nfev``, ``kind``, ``experiment``, ``interval_level`` (= ``level``) and
-    ``stated_interval``: "linearised" (``estimate -/+ q std``), or with ``profile=True`` "profile", the
-    profile-likelihood interval of every parameter at ``level`` in ``profile_lower``/``profile_upper``.
+    Returns ``estimate``, ``std``, ``covariance`` and their units (:func:`unit_variables`: ``unit``,
+    ``covariance_units``) on dims ``param``/``param_`` with attrs ``units_<name>`` (each unit as given),
+    ``n_points``, ``dof``, ``rss`` (weighted), ``reduced_chi2 = rss/dof``, ``noise`` ("estimated"/"known"),
+    ``method``, ``nfev``, ``kind``, ``experiment``, ``interval_level`` (= ``level``) and ``stated_interval``:
+    "linearised" (``estimate -/+ q std``), or with ``profile=True`` "profile", the profile-likelihood interval of
+    every parameter at ``level`` in ``profile_lower``/``profile_upper``.
     """
     if not 0.0 < level < 1.0:
         raise FitError(f"level = {level!r} must be in (0, 1)")
@@ -165,10 +186,10 @@ def fit_least_squares(
     cov = s2 * _covariance(res.jac, names)
     ds = xr.Dataset(
         {
-            "estimate": ("param", res.x.copy()),
-            "std": ("param", np.sqrt(np.diag(cov))),
-            "covariance": (("param", "param_"), cov),
-            "unit": ("param", np.array([str(u) for u in units], dtype=str)),
+            "estimate": ("param", res.x.copy(), {UNITS_VARIABLE: "unit"}),
+            "std": ("param", np.sqrt(np.diag(cov)), {UNITS_VARIABLE: "unit"}),
+            "covariance": (("param", "param_"), cov, {UNITS_VARIABLE: "covariance_units"}),
+            **unit_variables(units),
         },
         coords={"param": names, "param_": names},
     )
@@ -187,8 +208,8 @@ def fit_least_squares(
                                               name=names[j]) for j in range(p)])
         else:  # exact fit with estimated noise (RSS = 0): zero-width intervals, as std = 0
             ends = np.column_stack([res.x, res.x])
-        ds["profile_lower"] = ("param", ends[:, 0])
-        ds["profile_upper"] = ("param", ends[:, 1])
+        ds["profile_lower"] = ("param", ends[:, 0], {UNITS_VARIABLE: "unit"})
+        ds["profile_upper"] = ("param", ends[:, 1], {UNITS_VARIABLE: "unit"})
         ds.attrs.update(stated_interval="profile", profile_threshold_rss=float(threshold),
                         method=ds.attrs["method"] + "; profile-likelihood intervals (least_squares + brentq)")
     return ds

@@ -163,7 +163,8 @@ def fit_ift(data: xr.Dataset, *, curve_points: int = 200) -> xr.Dataset:
     grid = np.geomspace(positive.min(), positive.max(), curve_points)
     chuh, ahuh = fit["estimate"].values
     curve = np.array([chun_huh_ift(r, 1.0, sigma_ow, chuh, ahuh) for r in grid])
-    fit["interface"] = ("point", interface.astype(int))
+    fit["interface"] = ("point", interface.astype(int),
+                        {"units": "1", "long_name": "excess phase of the measurement: 1 water/ME, 2 oil/ME"})
     fit["ratio"] = ("point", ratio, {"units": "-", "long_name": "R13 (water/ME) or R23 (oil/ME)"})
     fit["ift"] = ("point", data["ift"].values, {"units": "mN/m"})
     fit = fit.assign_coords(curve_ratio=("curve_ratio", grid, {"units": "-"}))

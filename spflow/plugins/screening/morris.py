@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 
 from .salib_glue import is_constant, salib_problem
@@ -43,8 +44,12 @@ def morris_sample(names: list[str], lower: np.ndarray, upper: np.ndarray, trajec
 def morris_indices(x: np.ndarray, y: np.ndarray, names: list[str], lower: np.ndarray, upper: np.ndarray, *,
                    levels: int = 4, conf_level: float = 0.95, resamples: int = 100,
                    seed: int | np.random.Generator | None = None) -> xr.Dataset:
-    """mu, mu_star, mu_star_conf, sigma (``qoi``, ``param``; QoI units) and the QoI ``variance`` (``qoi``) from a
-    :func:`morris_sample` design ``x`` and its evaluations ``y`` (n_runs, n_qoi)."""
+    """mu, mu_star, mu_star_conf, sigma (``qoi``, ``param``) and the QoI ``variance`` (``qoi``) from a
+    :func:`morris_sample` design ``x`` and its evaluations ``y`` (n_runs, n_qoi).
+
+    The elementary effects are SALib's unscaled ones, output differences over the step on the unit-scaled box, so
+    the statistics are in each QoI's unit and the variance in its square: units per element ``qoi_units`` and
+    ``qoi_units_squared``, which the caller attaches (:func:`.qois.qoi_coords`)."""
     from SALib.analyze import morris as morris_analyze
 
     x = np.asarray(x, dtype=float)
@@ -66,8 +71,8 @@ def morris_indices(x: np.ndarray, y: np.ndarray, names: list[str], lower: np.nda
                                      num_levels=levels, seed=rng)
         for k in _KEYS:
             out[k][q] = np.asarray(res[k], dtype=float)
-    data = {k: (("qoi", "param"), out[k], {"units": "QoI unit"}) for k in _KEYS}
-    data["variance"] = ("qoi", np.var(y, axis=0), {"units": "QoI unit squared"})
+    data = {k: (("qoi", "param"), out[k], {UNITS_VARIABLE: "qoi_units"}) for k in _KEYS}
+    data["variance"] = ("qoi", np.var(y, axis=0), {UNITS_VARIABLE: "qoi_units_squared"})
     return xr.Dataset(data, coords={"qoi": np.arange(y.shape[1]), "param": list(names)},
                       attrs={"conf_level": conf_level, "resamples": resamples, "levels": levels,
                              "trajectories": x.shape[0] // (d + 1)})

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import squared_unit
 from spflow.core.errors import SchemaError
 from spflow.plugins.forward.stage import RESPONSE_UNITS
 from spflow.plugins.surrogates.outputs import OutputIndex, stack_outputs
@@ -71,13 +72,16 @@ def qoi_matrix(responses: xr.Dataset, qois: list[str]) -> tuple[np.ndarray, Outp
 
 def qoi_coords(index: OutputIndex) -> dict[str, tuple]:
     """Coordinates of a ``qoi`` dim: a readable label (``dp_max:BCF1``, ``dp:BCF1@1.5``) and the variable,
-    experiment, pv and unit of every column."""
+    experiment, pv and unit of every column, and the square of the unit (of a variance)."""
     labels = [f"{v}:{e}" if np.isnan(p) else f"{v}:{e}@{p:.6g}"
               for v, e, p in zip(index.variable, index.experiment, index.pv)]
+    units = [index.units[str(v)] for v in index.variable]
     return {
         "qoi": ("qoi", np.array(labels)),
         "qoi_variable": ("qoi", index.variable.astype(str)),
         "qoi_experiment": ("qoi", index.experiment.astype(str)),
         "qoi_pv": ("qoi", index.pv.astype(float), {"units": "1", "long_name": "injected pore volumes of the QoI"}),
-        "qoi_units": ("qoi", np.array([index.units[str(v)] for v in index.variable])),
+        "qoi_units": ("qoi", np.array(units), {"long_name": "UDUNITS unit of the QoI"}),
+        "qoi_units_squared": ("qoi", np.array([squared_unit(u) for u in units]),
+                              {"long_name": "UDUNITS unit of the QoI squared"}),
     }

@@ -2,8 +2,10 @@
 
 Every screening result carries the space it screened (``lower``, ``upper``, ``default``, ``unit`` over ``param``,
 i.e. it is also a valid SPACE), each parameter's ``group`` (sub-model), selection ``score`` and ``selected`` flag,
-the QoI labels (``qoi_variable``, ``qoi_experiment``, ``qoi_pv``, ``qoi_units``) and the ``variance`` of each QoI
-over the design its parameter was screened in. The ``selected_space`` stage turns it into the reduced SPACE.
+the QoI labels (``qoi_variable``, ``qoi_experiment``, ``qoi_pv``, ``qoi_units``, ``qoi_units_squared``) and the
+``variance`` of each QoI over the design its parameter was screened in. Units per element
+(:mod:`spflow.core.cf_metadata`): the space's in ``unit``, the variance's in ``qoi_units_squared``, Morris statistics'
+in ``qoi_units``. The ``selected_space`` stage turns it into the reduced SPACE.
 """
 
 from spflow.core.schema import DatasetSchema, Variable
@@ -18,21 +20,23 @@ _MORRIS = {"mu": "mean elementary effect", "mu_star": "mean absolute elementary 
            "mu_star_conf": "bootstrap half-width of mu_star", "sigma": "standard deviation of the elementary effects"}
 
 _COMMON = {
-    "lower": Variable(("param",), units=None, long_name="lower end of the screened range"),
-    "upper": Variable(("param",), units=None, long_name="upper end of the screened range"),
-    "default": Variable(("param",), units=None, long_name="default value of the parameter"),
-    "unit": Variable(("param",), kind="U", long_name="unit of each parameter"),
+    "lower": Variable(("param",), units_variable="unit", long_name="lower end of the screened range"),
+    "upper": Variable(("param",), units_variable="unit", long_name="upper end of the screened range"),
+    "default": Variable(("param",), units_variable="unit", long_name="default value of the parameter"),
+    "unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each parameter"),
     "group": Variable(("param",), kind="U", doc="sub-model the parameter was screened with",
                       long_name="sub-model the parameter was screened with"),
     "score": Variable(("param",), units="1", doc="selection score", long_name="selection score"),
     "selected": Variable(("param",), kind="b", doc="kept by the selection rule",
                          long_name="kept by the selection rule"),
-    "variance": Variable(_QP, units="", doc="QoI variance over the parameter's screening design",
+    "variance": Variable(_QP, units_variable="qoi_units_squared",
+                         doc="QoI variance over the parameter's screening design",
                          long_name="QoI variance over the parameter's screening design"),
     "qoi_variable": Variable(("qoi",), kind="U", long_name="variable of the QoI"),
     "qoi_experiment": Variable(("qoi",), kind="U", long_name="coreflood of the QoI"),
     "qoi_pv": Variable(("qoi",), units="1", allow_nan=True, long_name="injected pore volumes of the QoI"),
-    "qoi_units": Variable(("qoi",), kind="U", long_name="unit of the QoI"),
+    "qoi_units": Variable(("qoi",), kind="U", long_name="UDUNITS unit of the QoI"),
+    "qoi_units_squared": Variable(("qoi",), kind="U", long_name="UDUNITS unit of the QoI squared"),
 }
 
 #: Any screening result (what ``selected_space`` and the figure need).
@@ -49,10 +53,11 @@ SOBOL_SCREENING = DatasetSchema(
     doc="Sobol' indices per QoI and parameter, selection and screened space",
 )
 
-#: Morris screening: elementary-effect statistics in QoI units.
+#: Morris screening: elementary-effect statistics in QoI units (SALib's unscaled effects: output difference over the
+#: step on the unit-scaled box, :func:`.morris.morris_indices`).
 MORRIS_SCREENING = DatasetSchema(
     dims=_QP,
-    variables=_COMMON | {k: Variable(_QP, units="", long_name=_MORRIS[k])
+    variables=_COMMON | {k: Variable(_QP, units_variable="qoi_units", long_name=_MORRIS[k])
                          for k in ("mu", "mu_star", "mu_star_conf", "sigma")},
     attrs=("method",),
     doc="Morris mu, mu*, sigma per QoI and parameter, selection and screened space",

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 
 from .salib_glue import is_constant, salib_problem
@@ -84,7 +85,7 @@ def sobol_indices(y: np.ndarray, names: list[str], *, calc_second_order: bool = 
     data = {k: (("qoi", "param"), out[k], {"units": "1"}) for k in ("S1", "S1_conf", "ST", "ST_conf")}
     if calc_second_order:
         data |= {k: (("qoi", "param", "param_j"), out[k], {"units": "1"}) for k in ("S2", "S2_conf")}
-    data["variance"] = ("qoi", variance, {"units": "QoI unit squared"})
+    data["variance"] = ("qoi", variance, {UNITS_VARIABLE: "qoi_units_squared"})  # the caller attaches the units
     coords = {"qoi": np.arange(y.shape[1]), "param": list(names)}
     if calc_second_order:
         coords["param_j"] = list(names)

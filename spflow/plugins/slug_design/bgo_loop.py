@@ -27,6 +27,7 @@ import xarray as xr
 from scipy.optimize import minimize
 from scipy.stats import qmc
 
+from spflow.core.cf_metadata import UNITS_VARIABLE, squared_unit
 from spflow.core.errors import ParameterError
 
 from .eeihv import eeihv, eeihv_and_gradient
@@ -71,8 +72,9 @@ class BGOResult:
                    objective_units=("", "")) -> xr.Dataset:
         """The run as a Dataset with dims (evaluation, design_var, objective, iteration).
 
-        Per-coordinate units are the coordinates ``design_units`` and ``objective_units``; each variable's
-        ``attrs["units"]`` says which applies.
+        Per-coordinate units are the coordinates ``design_units``, ``objective_units`` and
+        ``objective_units_squared`` (UDUNITS strings, or whatever the caller gives); a variable in them has units per
+        element (``attrs["units_variable"]`` names the coordinate, :mod:`spflow.core.cf_metadata`).
         """
         n, d = self.X.shape
         design_names = [f"x{j}" for j in range(d)] if design_names is None else list(design_names)
@@ -81,9 +83,9 @@ class BGOResult:
             raise ParameterError(f"to_dataset: design_names and design_units need {d} entries each")
         if len(objective_names) != 2 or len(objective_units) != 2:
             raise ParameterError("to_dataset: objective_names and objective_units need 2 entries each")
-        per_design = {"units": "per design variable (see design_units)"}
-        per_objective = {"units": "per objective (see objective_units)"}
-        squared = {"units": "per objective, squared (see objective_units)"}
+        per_design = {UNITS_VARIABLE: "design_units"}
+        per_objective = {UNITS_VARIABLE: "objective_units"}
+        squared = {UNITS_VARIABLE: "objective_units_squared"}
         hyper = {key: np.array([h[key] for h in self.hyperparameters]) for key in self.hyperparameters[0]}
         on_front = np.zeros(n, dtype=bool)
         on_front[self.front_index] = True
@@ -109,8 +111,10 @@ class BGOResult:
             },
             coords={"evaluation": np.arange(n), "design_var": design_names, "objective": list(objective_names),
                     "iteration": np.arange(1, self.eeihv_max.size + 1),
-                    "design_units": ("design_var", design_units),
-                    "objective_units": ("objective", list(objective_units))},
+                    "design_units": ("design_var", design_units, {"long_name": "unit of each design variable"}),
+                    "objective_units": ("objective", list(objective_units), {"long_name": "unit of each objective"}),
+                    "objective_units_squared": ("objective", [squared_unit(u) for u in objective_units],
+                                                {"long_name": "unit of each objective squared"})},
             attrs={"method": "Bayesian global optimisation with EEIHV (thesis §4.7)",
                    "convention": "both objectives minimised", "stop_reason": self.stop_reason},
         )

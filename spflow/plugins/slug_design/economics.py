@@ -33,7 +33,6 @@ from collections.abc import Collection
 from dataclasses import dataclass, fields
 
 import numpy as np
-import scipy.constants as const
 import xarray as xr
 
 from spflow.core.errors import ParameterError
@@ -105,6 +104,8 @@ class ScaleUp:
     @property
     def brine_lb_per_pv(self) -> float:
         """Mass of one field pore volume of brine [lb]: ρ_w V_p (barrel and pound from scipy.constants)."""
+        import scipy.constants as const  # SciPy loads when a design is evaluated, not when the stage is listed
+
         return self.brine_density_kg_m3 * self.pore_volume_bbl * const.barrel / const.pound
 
 

@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import xarray as xr
-from joblib import delayed
 
 from spflow.core.errors import ParameterError
 from spflow.plugins.design.parameter_map import ParameterMap
@@ -139,6 +138,8 @@ class NoisyObjective:
         self.log: list[dict] = []
 
     def __call__(self, X) -> np.ndarray:
+        from joblib import delayed  # loads when a design is evaluated, not when the stage is listed
+
         X = _check_rows(X)
         problem = self.realisations.problem
         for row in X:  # every slug size validated before any simulation

@@ -11,7 +11,9 @@ fronts after selected iterations and after the last one, each with the front unc
 (empirical attainment function of sampled fronts, Vorob'ev expectation and deviation; Figs. 4.7-4.8), the knee design
 by minimum distance to the utopia point (TMDSM), the knee design's responses over ``knee_draws`` posterior draws with
 one price path each (Figs. 4.9-4.10) and sample price paths of the oil price model (Fig. 4.6). Units are in each
-variable's ``units`` attribute (objectives: the ``objective_units`` coordinate, M$ and kPa).
+variable's ``units`` attribute, or per element (:mod:`spflow.core.cf_metadata`): objectives in the
+``objective_units`` coordinate, M$ and kPa (UDUNITS has no currency: "M$" is not a UDUNITS unit), design variables
+in ``design_units`` (pore volumes, "1").
 """
 
 from __future__ import annotations
@@ -20,8 +22,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import xarray as xr
-from joblib import delayed
 
+from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
@@ -47,12 +49,18 @@ __all__ = ["SlugDesign", "SLUG_DESIGN"]
 SLUG_DESIGN = DatasetSchema(
     dims=("evaluation", "design_var", "objective"),
     variables={
-        "design": Variable(("evaluation", "design_var"), long_name="slug sizes of each evaluated design"),
-        "observed": Variable(("evaluation", "objective"), long_name="objective values of each evaluation"),
-        "projected": Variable(("evaluation", "objective"), long_name="objectives projected under the drift"),
+        "design": Variable(("evaluation", "design_var"), units_variable="design_units",
+                           long_name="slug sizes of each evaluated design"),
+        "observed": Variable(("evaluation", "objective"), units_variable="objective_units",
+                             long_name="objective values of each evaluation"),
+        "projected": Variable(("evaluation", "objective"), units_variable="objective_units",
+                              long_name="objectives projected under the drift"),
         "on_front": Variable(("evaluation",), kind="b", long_name="on the projected Pareto front"),
         "knee_design": Variable(("design_var",), units="1", long_name="slug sizes of the knee design (pore volumes)"),
-        "knee_projected": Variable(("objective",), long_name="projected objectives of the knee design"),
+        "knee_projected": Variable(("objective",), units_variable="objective_units",
+                                   long_name="projected objectives of the knee design"),
+        "design_units": Variable(("design_var",), kind="U", long_name="unit of each design variable"),
+        "objective_units": Variable(("objective",), kind="U", long_name="unit of each objective"),
     },
     attrs=("drift", "steps_per_year", "total_pv"),
     doc="EEIHV slug-size design: evaluations, projected Pareto front, front uncertainty and knee design (§4.7)",
@@ -76,7 +84,7 @@ def _snapshot_recorder(wanted: set[int], store: dict[int, BGOResult], ctx: Stage
 
 class SlugDesign(Stage):
     name = "slug_design"
-    version = "3"
+    version = "4"
     description = "slug-size design under price and parameter uncertainty: EEIHV on -NPV and max dp (thesis §4.7)"
     inputs = {"posterior": POSTERIOR}
     optional_inputs = frozenset({"posterior"})
@@ -206,7 +214,7 @@ class SlugDesign(Stage):
             vorob_at.append(np.full(unc.vorob_expectation.shape[0], k))
             threshold.append(unc.vorob_threshold)
             deviation.append(unc.vorob_deviation)
-        per_objective = {"units": "per objective (see objective_units)"}
+        per_objective = {UNITS_VARIABLE: "objective_units"}
         eaf, vorob = np.vstack(eaf), np.vstack(vorob)
         return xr.Dataset({
             "snapshot_projected": (("snapshot", "evaluation", "objective"), projected,
@@ -231,12 +239,14 @@ class SlugDesign(Stage):
             "knee_index": ((), row, {"units": "1", "description": "evaluation of the knee design (TMDSM)"}),
             "knee_design": ("design_var", out["design"].values[row], {"units": "1"}),
             "knee_projected": ("objective", out["projected"].values[row],
-                               {"units": "per objective (see objective_units)"}),
+                               {UNITS_VARIABLE: "objective_units"}),
         })
 
     def _knee_runs(self, ctx: StageContext, draws: Realisations, x: np.ndarray, parallel) -> xr.Dataset:
         """The knee design over ``knee_draws`` realisations (posterior draw and price path each): Figs. 4.9-4.10.
         Without a posterior the simulation is deterministic and is run once."""
+        from joblib import delayed  # loads when a design runs, not when the stage is listed
+
         problem = draws.problem
         n = self.params["knee_draws"] if draws.theta is not None else 1
         xi = [draws.draw(s) for s in np.random.SeedSequence([self.params["seed"], 1]).spawn(n)]

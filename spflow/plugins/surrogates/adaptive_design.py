@@ -28,7 +28,7 @@ from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 
-from .contract import SURROGATE, with_parameter_units
+from .contract import STORED_SURROGATE, with_parameter_units
 from .pce_model import PCE
 from .pce_stage import PCE_PARAMS, check_lists, fit_options
 from .training_data import space_marginals, training_set
@@ -45,7 +45,7 @@ class AdaptivePCE(Stage):
     version = "4"
     description = "PCE proxy on a growing LHS design until the mean LOO error settles (Algorithm 2)"
     inputs = {"space": SPACE}
-    output = SURROGATE
+    output = STORED_SURROGATE
     params = {
         **PCE_PARAMS,
         **{k: v for k, v in Forward.params.items() if k in _FORWARD_PARAMS and k != "experiments"},

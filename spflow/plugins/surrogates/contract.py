@@ -14,6 +14,7 @@ pipeline swaps the surrogate by naming another stage for the surrogate node.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -29,8 +30,8 @@ from .input_marginals import (DISTRIBUTION_LONG_NAME, PARAMETERS_LONG_NAME, Marg
 from .orthonormal_polynomials import PolynomialFamily
 from .outputs import OutputIndex
 
-__all__ = ["Surrogate", "SURROGATE", "load_surrogate", "surrogate_kinds", "with_parameter_units", "input_box",
-           "reference_points", "resolve_inputs", "UNIFORM_ASSUMED"]
+__all__ = ["Surrogate", "SURROGATE", "STORED_SURROGATE", "load_surrogate", "surrogate_kinds", "with_parameter_units",
+           "input_box", "reference_points", "resolve_inputs", "UNIFORM_ASSUMED"]
 
 #: Variables of a stored surrogate that hold parameter values (units per parameter).
 PARAMETER_VALUED = ("lower", "upper", "train_x")
@@ -50,6 +51,18 @@ SURROGATE = DatasetSchema(
     },
     attrs=("surrogate",),
     doc="a fitted surrogate (see attrs['surrogate'] for its kind)",
+)
+
+#: A surrogate as a stage stores it and as the stages reading one from a pipeline take it: :data:`SURROGATE` with the
+#: box in the units of the parameter space, units per element ``param_unit`` (:func:`with_parameter_units`). One
+#: built in memory (``Surrogate.to_dataset()``, what :func:`load_surrogate` takes) need not carry them.
+STORED_SURROGATE = DatasetSchema(
+    dims=SURROGATE.dims,
+    variables=SURROGATE.variables | {
+        **{k: replace(SURROGATE.variables[k], units_variable="param_unit") for k in ("lower", "upper")},
+        "param_unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each input parameter")},
+    attrs=SURROGATE.attrs,
+    doc="a fitted surrogate with the units of its inputs (see attrs['surrogate'] for its kind)",
 )
 
 #: What a surrogate loaded from a Dataset without recorded marginals assumes (:attr:`Surrogate.input_note`).

@@ -36,7 +36,6 @@ from abc import ABC, abstractmethod
 from typing import ClassVar
 
 import numpy as np
-from scipy import special
 
 from spflow.core.errors import ParameterError
 
@@ -252,6 +251,8 @@ class TruncatedNormal(_Standardised):
         self.mean = _number("TruncatedNormal", "mean", mean)
         self.std = _positive("TruncatedNormal", "std", std)
         self.lower, self.upper = _interval("TruncatedNormal", lower, upper)
+        from scipy import special  # SciPy loads when a truncated normal is built, not when the stages are listed
+
         mass = special.ndtr((self.upper - self.mean) / self.std) - special.ndtr((self.lower - self.mean) / self.std)
         if not mass > 1e-12:
             raise ParameterError(f"TruncatedNormal: [lower, upper] = [{self.lower:g}, {self.upper:g}] holds a "

@@ -29,7 +29,6 @@ hyperparameter fit (kernel gradients, optimiser; :mod:`.kriging_likelihood`), an
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import cholesky, qr, solve_triangular
 
 from spflow.core.errors import ParameterError
 
@@ -93,6 +92,8 @@ class UniversalKriging:
 
     def __init__(self, z: np.ndarray, y: np.ndarray, basis: np.ndarray, trend: np.ndarray, kernel: str,
                  lengthscale: np.ndarray, nugget: float):
+        from scipy.linalg import cholesky, qr, solve_triangular  # SciPy's linear algebra loads when a model is fitted
+
         self.z, self.y, self.basis = z, y, basis
         self.trend = np.asarray(trend, dtype=bool)
         self.kernel, self.lengthscale = kernel, check_kernel(kernel, lengthscale)

@@ -1,7 +1,7 @@
 """The ``pck`` and ``gp`` stages: PC-Kriging (thesis §3.8) and a plain GP proxy of simulator responses.
 
 Same inputs and output as the ``pce`` stage -- the parameter ``space``, the training ``design`` and the forward
-stage's ``responses`` in; a :data:`~.contract.SURROGATE` Dataset out -- so a pipeline swaps the proxy with
+stage's ``responses`` in; a :data:`~.contract.STORED_SURROGATE` Dataset out -- so a pipeline swaps the proxy with
 ``Pipeline.set_stage``. The output stores each output's Kriging LOO error (``loo``) and their mean (ε_LOO^mean,
 Eq. 3.9) in ``attrs["loo_mean"]``.
 """
@@ -15,7 +15,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN, SPACE
 from spflow.plugins.forward.stage import RESPONSES
 
-from .contract import SURROGATE, with_parameter_units
+from .contract import STORED_SURROGATE, with_parameter_units
 from .gp_model import GP
 from .kriging import KERNELS
 from .kriging_surrogate import RESTARTS, SHARING
@@ -45,7 +45,7 @@ class _KrigingStage(Stage):
     """Common part: read the training data, fit with the subclass's ``_fit(data, options)``, store."""
 
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
-    output = SURROGATE
+    output = STORED_SURROGATE
 
     def __init__(self, **params):
         super().__init__(**params)

@@ -1,11 +1,11 @@
 """The ``pce`` stage: a degree-adaptive PCE proxy of simulator responses (thesis §3.5, Algorithm 2 lines 5-10).
 
 Inputs: the parameter ``space`` (a uniform box, or the marginals it records: :mod:`.training_data`), the training
-``design`` on it and the forward stage's ``responses`` at
-the design points. Output: the fitted surrogate Dataset (:data:`~.contract.SURROGATE`, kind ``pce``) with per-output
-``loo``, ``modified_loo`` and ``empirical`` errors and their means over outputs (ε^mean, Eqs. 3.9-3.10) in attrs, with
-``degree_cap`` (the largest degree the search could try) and ``degree_cap_warning`` ("" unless the selected degree is
-that cap, :class:`~spflow.core.errors.DegreeCapWarning`).
+``design`` on it and the forward stage's ``responses`` at the design points. Output: the fitted surrogate Dataset
+(:data:`~.contract.STORED_SURROGATE`, kind ``pce``) with per-output ``loo``, ``modified_loo`` and ``empirical`` errors
+and their means over outputs (ε^mean, Eqs. 3.9-3.10) in attrs, with ``degree_cap`` (the largest degree the search
+could try) and ``degree_cap_warning`` ("" unless the selected degree is that cap,
+:class:`~spflow.core.errors.DegreeCapWarning`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN, SPACE
 from spflow.plugins.forward.stage import RESPONSE_UNITS, RESPONSES
 
-from .contract import SURROGATE, with_parameter_units
+from .contract import STORED_SURROGATE, with_parameter_units
 from .degree_adaptive import DEGREE_MAX, MAX_TERMS_RATIO, SOLVERS
 from .pce_model import PCE
 from .training_data import training_set
@@ -66,7 +66,7 @@ class PCEStage(Stage):
     version = "4"
     description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
-    output = SURROGATE
+    output = STORED_SURROGATE
     params = PCE_PARAMS
 
     def __init__(self, **params):

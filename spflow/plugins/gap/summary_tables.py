@@ -1,0 +1,75 @@
+"""What ``spflow diagnose`` prints and puts in ``report.html``: the verdict, the candidates' scores, the gap closed and
+the numerical-error scale as :class:`~spflow.core.report_table.Table` objects with their units (the terminal gets them
+as aligned text, the report as HTML tables), read off the :func:`~spflow.plugins.gap.report.summary` of a report.
+
+Log-density scores (ΔELPD and its standard error) are in nats, UDUNITS ``"1"``; fitted strengths are in each
+effect's own unit (``spflow list effects``), so their column carries none.
+"""
+
+from __future__ import annotations
+
+from spflow.core.report_table import Table
+
+__all__ = ["summary_items"]
+
+
+def _or_dash(value):
+    """A missing number (``None`` in the summary) as NaN, which a table shows as ``-``."""
+    return float("nan") if value is None else value
+
+
+def _verdict(result: dict) -> list[str | Table]:
+    items: list[str | Table] = [Table(
+        ["verdict", "ambiguity set", "declared effects", "final model"],
+        [[result["verdict"], ", ".join(result["ambiguity_set"]) or "-",
+          ", ".join(e["name"] for e in result["effects"]) or "-", result["final_model"] or "-"]],
+        title="Verdict")]
+    if result["verdict"] in ("unattributed", "out_of_catalogue"):
+        where = ", ".join(f"{c['variable']}:{c['experiment']}:{c['slug']}" for c in result["gap_cells"][:5])
+        items.append(f"the gap is real (chi2 {result['fit']['chi2_base']} on {result['fit']['dof']:g} dof) but not "
+                     f"attributable to a catalogued mechanism; where: {where or 'no single cell'}")
+    return items
+
+
+def _candidates(result: dict) -> Table:
+    declared = {e["name"] for e in result["effects"]}
+    tried = {t["name"] for t in result["tried_not_declared"]}
+    rows = []
+    for r in result["ranked_effects"]:
+        state = "declared" if r["name"] in declared else "tried, not declared" if r["name"] in tried else \
+            "shortlisted" if r["shortlisted"] else "screened out"
+        rows.append([r["name"], state, _or_dash(r["screen_z"]), _or_dash(r.get("fitted_strength")),
+                     _or_dash(r.get("delta_elpd")), _or_dash(r.get("delta_elpd_se")), _or_dash(r.get("gap_closed")),
+                     "" if "passes" not in r else "yes" if r["passes"] else "no"])
+    return Table(["candidate", "state", "screening z", "fitted strength", "delta ELPD", "delta ELPD SE",
+                  "gap closed", "passes the rule"], rows, units=["", "", "1", "", "1", "1", "1", ""],
+                 title="Candidate scores (first step; delta ELPD in nats, strength in the effect's unit)")
+
+
+def _gap_closed(result: dict, seconds: float) -> Table:
+    fit, closed = result["fit"], result["gap_closed"]
+    rows = [["calibration", _or_dash(closed["calibration"]), _or_dash(fit["chi2_base"]), _or_dash(fit["chi2_final"])],
+            ["held-out", _or_dash(closed["heldout"]), _or_dash(fit["chi2_heldout_base"]),
+             _or_dash(fit["chi2_heldout_final"])]]
+    return Table(["data", "gap closed", "chi2 base", "chi2 final"], rows, units=["", "1", "1", "1"],
+                 title=f"Gap closed ({result['forward_runs']} forward runs, {seconds:.0f} s)")
+
+
+def _numerical_scale(result: dict) -> Table | None:
+    error = result["numerical_error"] or {}
+    scale = error.get("scale")
+    if scale is None:
+        return None
+    return Table(["estimate", "interval lower", "interval upper", "interval level", "cap", "variants"],
+                 [[scale["estimate"], scale["lower"], scale["upper"], scale["level"], scale["maximum"],
+                   "; ".join(error["variants"])]], units=["1", "1", "1", "1", "1", ""],
+                 title="Numerical error in the error model: scale x the spread of the variants (estimated from the "
+                       "base model's calibration residuals)")
+
+
+def summary_items(result: dict, seconds: float) -> list[str | Table]:
+    """The verdict, candidate scores, gap closed and numerical-error scale of a diagnosis summary ``result``
+    (``summary.json``), the diagnosis having taken ``seconds``: tables, and the line saying where an unattributed
+    gap is."""
+    scale = _numerical_scale(result)
+    return [*_verdict(result), _candidates(result), _gap_closed(result, seconds), *([scale] if scale else [])]

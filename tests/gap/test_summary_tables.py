@@ -1,0 +1,73 @@
+"""The diagnosis summary as tables (``spflow diagnose``'s terminal lines and report.html): a hand-written summary in
+the layout of ``summary.json`` goes in; the tables hold its numbers, the units the gap report writes them in, and
+render as HTML tables with those units."""
+
+import math
+
+from spflow.core.html_report import Section, write_html_report
+from spflow.core.report_table import Table, text_lines
+from spflow.plugins.gap.summary_tables import summary_items
+
+RESULT = {
+    "verdict": "ambiguous", "ambiguity_set": ["capillary_pressure", "dispersion"], "final_model": "capillary_pressure",
+    "effects": [{"name": "capillary_pressure", "strength": 0.9}],
+    "tried_not_declared": [{"name": "kinetic_adsorption", "strength": 0.2}],
+    "ranked_effects": [
+        {"name": "capillary_pressure", "screen_z": 7.5, "snr": 3.0, "absorbed": 0.1, "shortlisted": True,
+         "fitted_strength": 0.9, "delta_elpd": 12.25, "delta_elpd_se": 2.5, "gap_closed": 0.8, "passes": True},
+        {"name": "kinetic_adsorption", "screen_z": 3.0, "snr": 1.0, "absorbed": 0.2, "shortlisted": True,
+         "fitted_strength": 0.2, "delta_elpd": None, "delta_elpd_se": 1.0, "gap_closed": 0.1, "passes": False},
+        {"name": "dispersion", "screen_z": 0.5, "snr": 0.1, "absorbed": 0.9, "shortlisted": False}],
+    "fit": {"chi2_base": 250.0, "chi2_final": 95.0, "dof": 100.0, "chi2_heldout_base": 80.0,
+            "chi2_heldout_final": None},
+    "gap_closed": {"calibration": 0.6, "heldout": 0.4}, "forward_runs": 42, "gap_cells": [],
+    "numerical_error": {"variants": ["40 cells, tvd", "40 cells, upwind"],
+                        "scale": {"estimate": 0.5, "lower": 0.25, "upper": 0.75, "level": 0.95, "maximum": 1.0}},
+}
+
+
+def _tables(result):
+    return {t.title.split(" (")[0].split(":")[0]: t for t in summary_items(result, 12.4) if isinstance(t, Table)}
+
+
+def test_tables_hold_the_summary_numbers_with_their_units():
+    tables = _tables(RESULT)
+    assert set(tables) == {"Verdict", "Candidate scores", "Gap closed", "Numerical error in the error model"}
+    assert tables["Verdict"].rows == [["ambiguous", "capillary_pressure, dispersion", "capillary_pressure",
+                                       "capillary_pressure"]]
+    scores = tables["Candidate scores"]
+    unit = dict(zip(scores.columns, scores.units))
+    assert unit["delta ELPD"] == unit["gap closed"] == unit["screening z"] == "1"  # nats: UDUNITS "1"
+    assert unit["fitted strength"] == ""  # each effect has its own unit
+    rows = {r[0]: dict(zip(scores.columns, r)) for r in scores.rows}
+    assert rows["capillary_pressure"]["state"] == "declared" and rows["capillary_pressure"]["delta ELPD"] == 12.25
+    assert rows["kinetic_adsorption"]["state"] == "tried, not declared"
+    tried = rows["kinetic_adsorption"]
+    assert math.isnan(tried["delta ELPD"]) and tried["passes the rule"] == "no"
+    assert rows["dispersion"]["state"] == "screened out" and math.isnan(rows["dispersion"]["delta ELPD"])
+    closed = tables["Gap closed"]
+    assert "42 forward runs, 12 s" in closed.title
+    assert closed.rows[0] == ["calibration", 0.6, 250.0, 95.0] and closed.rows[1][:3] == ["held-out", 0.4, 80.0]
+    assert math.isnan(closed.rows[1][3])
+    scale = tables["Numerical error in the error model"]
+    assert scale.rows == [[0.5, 0.25, 0.75, 0.95, 1.0, "40 cells, tvd; 40 cells, upwind"]]
+
+
+def test_without_a_numerical_scale_and_an_unattributed_gap():
+    result = dict(RESULT, verdict="unattributed", ambiguity_set=[], effects=[], numerical_error=None,
+                  gap_cells=[{"variable": "dp", "experiment": "BCF1", "slug": "SP"}])
+    items = summary_items(result, 1.0)
+    assert "Numerical error in the error model" not in _tables(result)
+    (line,) = [i for i in items if isinstance(i, str)]
+    assert "not attributable to a catalogued mechanism; where: dp:BCF1:SP" in line
+    assert _tables(result)["Verdict"].rows == [["unattributed", "-", "-", "capillary_pressure"]]
+
+
+def test_the_report_renders_them_as_html_tables_with_units(tmp_path):
+    items = summary_items(RESULT, 12.4)
+    page = write_html_report(tmp_path / "report.html", "t", [Section("Gap diagnosis", items)], []).read_text()
+    assert page.count("<table>") == 4 + 2  # the four tables, the (empty) provenance and the software versions
+    assert "<th>delta ELPD <span class='unit'>[1]</span></th>" in page
+    assert "<td class='num'>12.25</td>" in page and "<pre>" not in page.split("Gap diagnosis")[1].split("Software")[0]
+    text = text_lines(items)
+    assert text[0] == "Verdict" and text[1].split()[0] == "verdict"
