@@ -141,7 +141,7 @@ def test_objectives_are_half_squared_misfits_of_the_training_coreflood(space, bu
     np.testing.assert_allclose(out["objectives"].values,
                                _objectives_by_hand(space, bundled, index, intercept, slopes, out["designs"].values),
                                rtol=1e-10)
-    assert out["objective_unit"].values.tolist() == ["1", "Pa^2"]
+    assert out["objective_unit"].values.tolist() == ["1", "(Pa)^2"]
 
 
 def _linear_problem(space, bundled, targets, orthonormal):

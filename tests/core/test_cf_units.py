@@ -23,6 +23,9 @@ NOT_YET = {
     ("design points", "values"):
         "what the stages taking a design accept: a design a user gives (Pipeline.add_data, load_netcdf) may carry no "
         "units; the stages drawing one write 'design points with the units of their columns'",
+    **{("a fitted surrogate (see attrs['surrogate'] for its kind)", v):
+       "what the stages taking a surrogate accept: a third-party surrogate stage's output may carry no units per "
+       "parameter; the built-in surrogate stages write the stored form with them" for v in ("lower", "upper")},
 }
 
 

@@ -19,7 +19,7 @@ from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.observations import OBSERVATIONS
-from spflow.plugins.surrogates.contract import STORED_SURROGATE, Surrogate, load_surrogate
+from spflow.plugins.surrogates.contract import SURROGATE, Surrogate, load_surrogate
 
 from .aligned_data import align
 from .likelihood import NOISE_MODES, PosteriorModel
@@ -39,7 +39,7 @@ class ChainResult(dict):
 class SamplerStage(Stage):
     """Base of the MCMC stages; subclasses set ``name``/``description``, extra ``params`` and ``_sample_runs``."""
 
-    inputs = {"surrogate": STORED_SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
+    inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = POSTERIOR
     common_params = {
         "experiments": Param(list, ["BCF1"], doc="experiments whose data train the posterior (thesis: BCF1)"),

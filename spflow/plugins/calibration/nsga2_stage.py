@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
-from spflow.core.cf_metadata import UNITS_VARIABLE, udunits
+from spflow.core.cf_metadata import UNITS_VARIABLE, squared_unit, udunits
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
@@ -57,7 +57,7 @@ from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.observations import OBSERVATIONS
-from spflow.plugins.surrogates.contract import STORED_SURROGATE, load_surrogate
+from spflow.plugins.surrogates.contract import SURROGATE, load_surrogate
 
 if TYPE_CHECKING:
     from spflow.plugins.calibration.nsga2_history import CalibrationHistory
@@ -121,15 +121,11 @@ UNDETERMINED_FRACTION = 0.9
 _MISFIT_PVALUE = 0.01
 
 
-def _squared_unit(unit: str) -> str:
-    return "1" if unit in ("1", "") else f"{unit}^2"
-
-
 class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
-    version = "6"
+    version = "7"
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
-    inputs = {"surrogate": STORED_SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
+    inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
     params = {
         "training": Param(list, ["BCF1"], doc="experiments whose observations define the objectives (summed per "
@@ -220,7 +216,7 @@ class NSGA2Calibration(Stage):
                                  crossover_eta=p["crossover_eta"], mutation_eta=p["mutation_eta"])
         minimize(problem, algorithm, ("n_gen", p["generations"]), seed=p["seed"], callback=history, verbose=False)
         region = noise.region(problem.mean, lower, upper, history.archive, p["confidence_level"])
-        units = [_squared_unit(model.outputs.units.get(v, "1")) for v in p["variables"]]
+        units = [squared_unit(model.outputs.units.get(v, "1") or "1") for v in p["variables"]]
         ds = mapping.attach(self._dataset(history, names, space, units))
         ds = self._add_confidence(ds, region, noise, len(history.archive))
         return self._add_undetermined(self._add_consistent_heldout(ds, noise.chi2(problem.mean(ds["designs"].values)),

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from spflow.core.cf_metadata import udunits
+from spflow.core.cf_metadata import squared_unit, udunits
 from spflow.core.errors import ParameterError
 
 __all__ = ["OutputIndex", "stack_outputs"]
@@ -63,7 +63,7 @@ class OutputIndex:
                 "output_pv": ("output", self.pv.astype(float), {"units": "1", "long_name": "injected pore volumes "
                                                                                           "of the output (NaN: none)"}),
                 "output_unit": ("output", np.array(unit, dtype=str), {"long_name": "UDUNITS unit of the output"}),
-                "output_unit_squared": ("output", np.array(["1" if u == "1" else f"({u})^2" for u in unit], dtype=str),
+                "output_unit_squared": ("output", np.array([squared_unit(u) for u in unit], dtype=str),
                                         {"long_name": "UDUNITS unit of the output's square"})}
 
     @classmethod

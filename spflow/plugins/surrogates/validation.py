@@ -21,7 +21,7 @@ from spflow.core.schema import DatasetSchema, Variable
 from spflow.core.stage import Stage, StageContext
 from spflow.plugins.design.schemas import DESIGN
 
-from .contract import STORED_SURROGATE, load_surrogate
+from .contract import SURROGATE, load_surrogate
 from .outputs import OutputIndex, stack_outputs
 from .regression import is_constant
 from .training_data import design_points
@@ -78,7 +78,7 @@ class SurrogateValidation(Stage):
     name = "surrogate_validation"
     version = "1"
     description = "R², relative errors and moment errors (Eq. 3.15) of any surrogate on an independent design"
-    inputs = {"surrogate": STORED_SURROGATE, "design": DESIGN, "responses": DatasetSchema(dims=("sample",))}
+    inputs = {"surrogate": SURROGATE, "design": DESIGN, "responses": DatasetSchema(dims=("sample",))}
     output = VALIDATION
     params = {}
 
