@@ -76,7 +76,7 @@ def main() -> None:
     parser.add_argument("--schedules", default="BCF1,BCF2,BCF3")
     parser.add_argument("--strengths", default="0.3,1,3")
     parser.add_argument("--cells", default="30,60,100")
-    parser.add_argument("--schemes", default="explicit,implicit",
+    parser.add_argument("--schemes", default="explicit,implicit,adaptive",
                         help="comma-separated capillary[@cfl] (default cfl 0.5)")
     parser.add_argument("--ref-cfl", type=float, default=0.015)
     parser.add_argument("--no-ref-check", action="store_true", help="skip the reference at twice its Courant number")

@@ -312,7 +312,8 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     cap_work = np.zeros((5, n + 1))
     cap_flux = np.zeros((T.NFLUX, n + 1))
     capillary = prm[K.PC0] > 0.0
-    implicit_step = False  # whether the current (last) step takes the implicit capillary step
+    # whether the current (last) step takes the implicit capillary step (for the budget message before a step)
+    implicit_step = capillary and capillary_mode == L.CAP_IMPLICIT
     switch_step = cfl * dx / CAPILLARY_SWITCH_SPEED
     series = np.zeros((R.N_SERIES, n_out))
     prof = np.zeros((N_PROFILE, n_prof, n))
