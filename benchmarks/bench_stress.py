@@ -168,7 +168,7 @@ def main() -> None:
     parser.add_argument("--slowest", type=int, default=10, help="slowest draws to list")
     parser.add_argument("--max-wall", type=float, help="wall-time budget per run (s; default: simulate's)")
     parser.add_argument("--save", help="write every case and result as JSON lines to this file")
-    parser.add_argument("--capillary", choices=["explicit", "implicit"], default="explicit",
+    parser.add_argument("--capillary", choices=["explicit", "implicit", "adaptive"], default="explicit",
                         help="time discretisation of the capillary flux (simulate's option)")
     parser.add_argument("--no-cap", action="store_true",
                         help="keep draws above the injected-viscosity cap (the draws of the runs before the cap)")

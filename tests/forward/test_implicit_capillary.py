@@ -1,4 +1,6 @@
-"""The linearly implicit capillary step (``capillary="implicit"``, opt-in) against the explicit scheme (the default).
+"""The linearly implicit capillary step (``capillary="implicit"``, opt-in) and the adaptive mode
+(``capillary="adaptive"``: explicit while its diffusion limit is above the switch step, implicit below) against the
+explicit scheme (the default).
 
 With the ``capillary_pressure`` effect on, a low-rate waterflood is capillary dominated: the explicit scheme's
 diffusion limit ``dx^2 / (2 D_cap)`` is some 300 times below the advective CFL step at 25 cells. The references
@@ -13,6 +15,7 @@ import pytest
 
 from spflow.core.errors import ParameterError
 from spflow.plugins.forward.budgets import expected_steps
+from spflow.plugins.forward.kernel import CAPILLARY_SWITCH_SPEED
 from spflow.plugins.forward.schedule import BCF_SCHEDULES
 from spflow.plugins.forward.simulate import simulate
 
@@ -51,6 +54,34 @@ def test_implicit_matches_the_explicit_reference_at_small_steps():
     # and Pc matters here: without it the recovery at 1.5 PV differs by far more than the tolerance
     no_pc = waterflood(25, effects=tuple({**PC_ON, "capillary_pressure": 0.0}.items()))
     assert abs(no_pc.recovery.values[-1] - ref.recovery.values[-1]) > 10 * 2e-3
+
+
+def test_adaptive_takes_the_implicit_step_at_the_switch_step_where_the_explicit_one_is_shorter():
+    """On the capillary-dominated waterflood the adaptive mode takes (nearly) every step implicitly at the switch
+    step ``cfl dx / CAPILLARY_SWITCH_SPEED``: at most 25 x the budget's expected steps (the explicit scheme takes
+    over 5 x more: 64 700), and recovery within 2e-3 and dp within 1 % (from 0.15 PV on) of the explicit reference
+    at cfl 0.1."""
+    ref = waterflood(25, "explicit", 0.1)
+    ada = waterflood(25, "adaptive")
+    assert ada.attrs["n_capillary_implicit"] >= 0.99 * ada.attrs["n_steps"]
+    # the switch step is cfl dx / 100: PV / that = 1.5 * 25 * 100 / 0.5 steps
+    assert ada.attrs["n_steps"] <= PV * 25 * CAPILLARY_SWITCH_SPEED / 0.5 + 2
+    assert ada.attrs["n_steps"] <= 25 * expected_steps(PV, 25, 0.5)
+    assert waterflood(25, "explicit").attrs["n_steps"] >= 5 * ada.attrs["n_steps"]
+    assert np.max(np.abs(ada.recovery.values - ref.recovery.values)) <= 2e-3
+    later = ref.pv.values >= 0.15
+    assert np.max(np.abs(ada.dp.values[later] / ref.dp.values[later] - 1.0)) <= 0.01
+
+
+def test_adaptive_is_the_explicit_scheme_while_the_explicit_step_is_above_the_switch_step():
+    """BCF1 with Pc at the default rate on 30 cells: the explicit diffusion limit stays above the switch step, so
+    the adaptive run takes no implicit step and is bit-identical to the explicit one."""
+    kwargs = dict(cells=30, pv_step=0.1, effects={"capillary_pressure": 1.0})
+    a = simulate("BCF1", capillary="adaptive", **kwargs)
+    b = simulate("BCF1", capillary="explicit", **kwargs)
+    assert a.attrs["n_capillary_implicit"] == 0 and b.attrs["n_capillary_limited"] > 0
+    for var in a.data_vars:
+        np.testing.assert_array_equal(a[var].values, b[var].values, err_msg=var)
 
 
 def test_implicit_converges_as_cells_double():
@@ -97,14 +128,17 @@ def test_waterflood_with_pc_balances_water_and_oil_from_outputs():
         assert ds.attrs[f"mass_balance_error_{comp}"] <= BALANCE_TOL, comp
 
 
+@pytest.mark.parametrize("capillary", ["implicit", "adaptive"])
 @pytest.mark.parametrize("schedule", ["BCF1", "BCF2", "BCF3"])
-def test_sp_floods_with_pc_conserve_and_stay_in_bounds(schedule):
+def test_sp_floods_with_pc_conserve_and_stay_in_bounds(schedule, capillary):
     """Surfactant-polymer floods with Pc at a tenth of the default rate: oil and surfactant balanced from the
     outputs, every component by the kernel's totals, saturations in [0, 1] summing to 1, non-negative
-    concentrations."""
+    concentrations (the adaptive runs mix explicit and implicit capillary steps)."""
     prof_at = [1.0, 2.0, 3.0]
     ds = simulate(schedule, {"QINJ": 0.025}, cells=40, pv_step=0.05, profiles_at=prof_at,
-                  effects={"capillary_pressure": 1.0}, capillary="implicit")
+                  effects={"capillary_pressure": 1.0}, capillary=capillary)
+    n_implicit = ds.attrs["n_capillary_implicit"]
+    assert n_implicit == ds.attrs["n_steps"] if capillary == "implicit" else 0 < n_implicit < ds.attrs["n_steps"]
     dpv = np.diff(ds.pv.values)
     oil_out = np.cumsum(ds.oil_cut.values[1:] * dpv)
     surf_out = np.cumsum(ds.c_surfactant_out.values[1:] * dpv)
@@ -137,12 +171,15 @@ def _surfactant_injected(schedule, t):
 
 @pytest.mark.parametrize("schedule", ["BCF1", "BCF2", "BCF3"])
 def test_pc_off_runs_do_not_depend_on_the_capillary_option(schedule):
-    """With Pc off (the default) the implicit and explicit paths run the identical step sequence: bit-identical."""
-    a = simulate(schedule, cells=50, pv_step=0.05, profiles_at=[1.0, 2.0], capillary="implicit")
+    """With Pc off (the default) the implicit, adaptive and explicit paths run the identical step sequence:
+    bit-identical."""
     b = simulate(schedule, cells=50, pv_step=0.05, profiles_at=[1.0, 2.0], capillary="explicit")
-    assert a.attrs["n_steps"] == b.attrs["n_steps"] and a.attrs["n_capillary_limited"] == 0
-    for var in a.data_vars:
-        np.testing.assert_array_equal(a[var].values, b[var].values, err_msg=var)
+    for capillary in ("implicit", "adaptive"):
+        a = simulate(schedule, cells=50, pv_step=0.05, profiles_at=[1.0, 2.0], capillary=capillary)
+        assert a.attrs["n_steps"] == b.attrs["n_steps"] and a.attrs["n_capillary_limited"] == 0
+        assert a.attrs["n_capillary_implicit"] == 0
+        for var in a.data_vars:
+            np.testing.assert_array_equal(a[var].values, b[var].values, err_msg=var)
 
 
 @pytest.mark.parametrize("value", ["Implicit", "semi", 1, None])

@@ -10,18 +10,21 @@ Per step (all in pore-volume units, see ``transport``):
 3. pressure: incompressible flow at a constant injection rate with the producer at constant pressure makes the
    total Darcy velocity uniform, so the implicit pressure equation reduces to the integral of ``u / (k lambda_T)``
    over the cells (plus the capillary term when Pc is on) -- ``transport.pressure_profile``;
-4. time step: ``dt = cfl dx / max_i speed_i`` (advective CFL from the local wave-speed bound), with Pc at most the
-   step at which the step-start capillary fluxes change a cell's water volume by ``CAPILLARY_DS_MAX``, but not
-   below ``CAPILLARY_MIN_FRACTION`` of the advective step (an accuracy limit: the implicit capillary step needs
-   none for stability; with the explicit reference path
-   ``implicit_pc=False`` the rate gets the diffusion limit ``+ 2 max_i D_cap,i / dx^2`` instead), capped by a ramp
+4. time step: ``dt = cfl dx / max_i speed_i`` (advective CFL from the local wave-speed bound); with Pc, by the
+   capillary mode (``state_layout.CAP_*``): the explicit flux adds the diffusion limit ``+ 2 max_i D_cap,i / dx^2``
+   to the rate; the implicit step is at most the step at which the step-start capillary fluxes change a cell's
+   water volume by ``CAPILLARY_DS_MAX``, but not below ``CAPILLARY_MIN_FRACTION`` of the advective step (an accuracy
+   limit: it needs none for stability); the adaptive mode takes the explicit step while its diffusion limit is at
+   least the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED`` (the switch step), and else the implicit step at
+   the switch step (or the advective step if that is shorter). The step is capped by a ramp
    from every slug start (``ramp_step``:
    the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
    shortened to land exactly on slug ends and profile times. Output times never shorten a step, so the series do
    not depend on the output grid;
-5. explicit conservative update of the six components with the TVD (or upwind) fluxes, then, with Pc, the linearly
-   implicit capillary step (``capillary_step``: backward Euler in the carrier saturation, operator split,
-   conservative; ``transport.implicit_capillary_fluxes``); a step that would make a saturation or concentration
+5. explicit conservative update of the six components with the TVD (or upwind) fluxes (plus the explicit
+   capillary fluxes), or, on an implicit capillary step, the advective update followed by the linearly implicit
+   capillary step (``capillary_step``: backward Euler in the carrier saturation, operator split, conservative;
+   ``transport.implicit_capillary_fluxes``); a step that would make a saturation or concentration
    negative beyond round-off is retried with half the step, and fails as a time-step collapse after 60 halvings;
 6. backward-Euler dispersion of surfactant, polymer, anions and divalent cations (operator split, conservative),
    the four tridiagonal systems solved in one batched sweep (``transport.solve_dispersion``).
@@ -33,9 +36,10 @@ GIL, numba has no clock); the failing cell reported is the one that limits the n
 Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status`` is a ``state_layout`` error code and
 ``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell; ``stats[N_STATS]`` counts the step
 halvings (``ST_HALVINGS``), the steps whose step was set by the capillary term rather than the wave speed
-(``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one)
-and the steps capped by the ramp (``ST_RAMP``). ``totals[4, 6]`` holds, per component, the amount in place at the
-start, injected, produced and in place at the end (PV units), for the mass balance.
+(``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one),
+the steps capped by the ramp (``ST_RAMP``) and the steps taken with the implicit capillary step (``ST_IMPLICIT``).
+``totals[4, 6]`` holds, per component, the amount in place at the start, injected, produced and in place at the end
+(PV units), for the mass balance.
 """
 
 import math
@@ -54,8 +58,8 @@ P_SW, P_SO, P_SME, P_CP, P_CS, P_SAL, P_PRES, P_ADS3, P_ADS4, P_OIL, P_IFT = ran
 N_PROFILE = 11
 N_INFO = 12
 # stats rows
-ST_HALVINGS, ST_CAPILLARY, ST_RAMP = range(3)
-N_STATS = 3
+ST_HALVINGS, ST_CAPILLARY, ST_RAMP, ST_IMPLICIT = range(4)
+N_STATS = 4
 # dispersion rows
 D_ANION, D_DIVALENT, D_SURF, D_POLY = range(4)
 N_DISP = 4
@@ -73,6 +77,11 @@ RAMP_GROWTH = 1.25
 # step makes (it stops at capillary equilibrium); docs/forward_model.md has the measured time error
 CAPILLARY_DS_MAX = 0.05
 CAPILLARY_MIN_FRACTION = 0.05
+# the adaptive capillary mode takes the explicit flux while its diffusion-limited step is at least the CFL step of a
+# wave of this speed (PV units), the switch step: 25 x the wave speed of the step budget's expected steps
+# (budgets.expected_steps), so the capillary term costs at most half the default budget; where the explicit step
+# would be shorter, the implicit capillary step at the switch step
+CAPILLARY_SWITCH_SPEED = 100.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -263,14 +272,16 @@ def landing_step(dt, t, slug_end, prof_pv, k_prof):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, stop, implicit_pc=False):
+def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, stop,
+               capillary_mode=L.CAP_EXPLICIT):
     """Run the coreflood. ``inj[4, slugs]`` = surfactant vol. frac., polymer wt %, anions, divalent (meq/ml);
     ``flow[2, slugs]`` = Darcy velocity (m/s) and time per PV (s) of each slug (``kernel_inputs.slug_flow``);
     ``end_pv`` cumulative slug ends; ``out_pv`` output times (first 0, last the total PV); ``prof_pv`` sorted
     profile times; ``n`` cells; ``tvd`` True for the TVD scheme; ``cfl`` Courant number; ``max_steps`` the step
-    budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step); ``implicit_pc`` True for the
-    linearly implicit capillary step (opt-in), False for the explicit capillary fluxes (the default, with the
-    explicit capillary-diffusion step limit).
+    budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step); ``capillary_mode`` the time
+    discretisation of the capillary flux (``state_layout.CAP_EXPLICIT``: explicit fluxes with the diffusion step
+    limit; ``CAP_IMPLICIT``: the linearly implicit capillary step on every step; ``CAP_ADAPTIVE``: explicit while
+    the diffusion limit stays above the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED``, implicit below).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
@@ -301,7 +312,9 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     cap_work = np.zeros((5, n + 1))
     cap_flux = np.zeros((T.NFLUX, n + 1))
     capillary = prm[K.PC0] > 0.0
-    explicit_pc = capillary and not implicit_pc
+    # whether the current (last) step takes the implicit capillary step (for the budget message before a step)
+    implicit_step = capillary and capillary_mode == L.CAP_IMPLICIT
+    switch_step = cfl * dx / CAPILLARY_SWITCH_SPEED
     series = np.zeros((R.N_SERIES, n_out))
     prof = np.zeros((N_PROFILE, n_prof, n))
     totals = np.zeros((4, 6))
@@ -381,7 +394,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             if status != L.OK:
                 break
         if steps >= max_steps or stop[0] != 0:
-            limiting, rmax = _limiting_cell(pr, n, dx, explicit_pc)
+            limiting, rmax = _limiting_cell(pr, n, dx, capillary and not implicit_step)
             fill_failure_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
             status = L.ERR_STEPS if steps >= max_steps else L.ERR_WALL
             break
@@ -390,17 +403,26 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
         for i in range(n):
             if pr[L.SPEED, i] > smax:
                 smax = pr[L.SPEED, i]
-            if explicit_pc and pr[L.DCAP, i] > dmax:
+            if capillary and capillary_mode != L.CAP_IMPLICIT and pr[L.DCAP, i] > dmax:
                 dmax = pr[L.DCAP, i]
         rate = smax / dx + 2.0 * dmax / (dx * dx)
-        if 2.0 * dmax / dx > smax:
-            stats[ST_CAPILLARY] += 1.0
         dt_stable = cfl / rate if rate > 0.0 else np.inf
-        if capillary and implicit_pc:
-            dt_cap = max(capillary_change_step(pr, n, dx, k_over_ul, cap_flux), CAPILLARY_MIN_FRACTION * dt_stable)
+        implicit_step = capillary and (capillary_mode == L.CAP_IMPLICIT
+                                       or (capillary_mode == L.CAP_ADAPTIVE and dt_stable < switch_step))
+        if implicit_step:
+            # the advective step, shortened by the saturation-change control (implicit mode) or to the switch step
+            dt_stable = cfl / (smax / dx) if smax > 0.0 else np.inf
+            if capillary_mode == L.CAP_IMPLICIT:
+                dt_cap = max(capillary_change_step(pr, n, dx, k_over_ul, cap_flux),
+                             CAPILLARY_MIN_FRACTION * dt_stable)
+            else:
+                dt_cap = switch_step
             if dt_cap < dt_stable:
                 dt_stable = dt_cap
                 stats[ST_CAPILLARY] += 1.0
+            stats[ST_IMPLICIT] += 1.0
+        elif 2.0 * dmax / dx > smax:
+            stats[ST_CAPILLARY] += 1.0
         dt, ramp = ramp_step(dt_stable, ramp, dx, cfl)
         if dt < dt_stable:
             stats[ST_RAMP] += 1.0
@@ -418,12 +440,12 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             lam = dt / dx
             T.advective_fluxes(pr, n, tvd, lam, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug], inj[1, slug],
                                inj[2, slug], inj[3, slug], flux)
-            if explicit_pc:
+            if capillary and not implicit_step:
                 T.capillary_fluxes(pr, n, dx, k_over_ul, flux)
             for r in range(6):
                 for i in range(n):
                     new[r, i] = st[r, i] - lam * (flux[r, i + 1] - flux[r, i])
-            if capillary and implicit_pc:
+            if implicit_step:
                 capillary_step(st, new, pr, prm, n, dx, lam, k_over_ul, ds_adv, cap_work, cap_flux)
             bad = first_negative(new, st, n)
             if bad < 0:

@@ -10,6 +10,7 @@ import numpy as np
 from spflow.core.errors import ParameterError
 
 from . import effects as E
+from . import state_layout as L
 from .checks import check_number
 from .parameters import resolve_params
 from .injected_viscosity_cap import check_injected_viscosity
@@ -19,8 +20,8 @@ __all__ = ["SCHEMES", "CAPILLARY", "MAX_CELLS", "output_grid", "common_grid", "v
 
 #: transport schemes: name -> second order (TVD) or not
 SCHEMES = {"tvd": True, "upwind": False}
-#: capillary time discretisations: name -> implicit or not
-CAPILLARY = {"implicit": True, "explicit": False}
+#: capillary time discretisations: name -> the kernel's capillary mode
+CAPILLARY = {"explicit": L.CAP_EXPLICIT, "implicit": L.CAP_IMPLICIT, "adaptive": L.CAP_ADAPTIVE}
 #: the largest 1-D grid
 MAX_CELLS = 20000
 

@@ -70,10 +70,13 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         ``ceil(total_pv * cells * 4 / cfl)`` and 600 s. Exceeding either raises ``SimulationError``.
     capillary:
         time discretisation of the capillary flux when the ``capillary_pressure`` effect is on (1-D only):
-        ``"explicit"`` (default: forward Euler with the step limit ``dx^2 / (2 max D_cap)``) or ``"implicit"``
-        (linearised backward Euler, operator split after the advection, no step limit of its own; opt-in until
-        its inlet transient into connate water is settled: docs/forward_model.md).
-        No effect with Pc off.
+        ``"explicit"`` (default: forward Euler with the step limit ``dx^2 / (2 max D_cap)``), ``"implicit"``
+        (linearised backward Euler, operator split after the advection, no step limit of its own) or
+        ``"adaptive"`` (the explicit flux while its step limit is at least the CFL step of a wave of 100 PV^-1,
+        25 x the speed of the budget's expected steps; the implicit step at that step where the explicit one would
+        be shorter, so capillarity never costs more than half the default step budget). The implicit and adaptive
+        modes are opt-in: against a time-converged reference they are less accurate than the explicit flux on
+        strongly capillary BCF runs (docs/forward_model.md, "Capillary time step"). No effect with Pc off.
 
     Returns
     -------
@@ -84,8 +87,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     (``param_<NAME>``) and effect strength (``effect_<name>``), the per-component relative mass-balance error,
     ``n_steps``, ``wall_time_s``, the budgets ``max_steps`` and ``max_wall_s`` and the step-control counts
     ``n_halvings`` (retried steps), ``n_capillary_limited`` (steps whose step the capillary term set: the
-    saturation-change limit of the implicit step, the diffusion limit of the explicit one) and ``n_ramp_limited``
-    (steps capped by the ramp after a slug start) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
+    saturation-change limit of the implicit step, the switch step of the adaptive mode, the diffusion limit of the
+    explicit flux), ``n_ramp_limited`` (steps capped by the ramp after a slug start) and ``n_capillary_implicit``
+    (steps taken with the implicit capillary step) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
     sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
@@ -116,7 +120,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         schedule, params, cells, effects, scheme, pv_step, profiles_at, cfl
     )
     max_steps, max_wall_s = resolve_budgets(max_steps, max_wall_s, sched.total_pv, cells, cfl)
-    from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_RAMP, run_kernel  # numba: imported when a run starts
+    from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_IMPLICIT, ST_RAMP, run_kernel  # numba: imported at a run
     from .outputs import build_dataset
 
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
@@ -135,7 +139,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
              "pv_step": pv_step,
              "n_steps": int(n_steps), "wall_time_s": wall, "max_steps": max_steps, "max_wall_s": max_wall_s,
              "n_halvings": int(stats[ST_HALVINGS]), "n_capillary_limited": int(stats[ST_CAPILLARY]),
-             "n_ramp_limited": int(stats[ST_RAMP])}
+             "n_ramp_limited": int(stats[ST_RAMP]), "n_capillary_implicit": int(stats[ST_IMPLICIT])}
     if sched.has_rates:
         attrs["slug_rate_ml_min"] = [float(r) for r in sched.rates_ml_min(resolved["QINJ"])]
     attrs.update({f"param_{k}": v for k, v in resolved.items()})

@@ -48,3 +48,8 @@ ERR_NONFINITE = 2
 ERR_IMMOBILE = 3
 ERR_STEPS = 4
 ERR_WALL = 5
+
+# time discretisations of the capillary flux (``run_kernel``'s ``capillary_mode``; names in ``run_arguments.CAPILLARY``)
+CAP_EXPLICIT = 0  # forward Euler with the diffusion limit dx^2 / (2 D_cap) on every step
+CAP_IMPLICIT = 1  # the linearly implicit step on every step, at the advective step (saturation-change control)
+CAP_ADAPTIVE = 2  # explicit while its diffusion limit is affordable, the implicit step where it is not
