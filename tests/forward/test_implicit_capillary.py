@@ -186,3 +186,20 @@ def test_pc_off_runs_do_not_depend_on_the_capillary_option(schedule):
 def test_bad_capillary_option_is_rejected(value):
     with pytest.raises(ParameterError, match="capillary must be one of"):
         simulate("BCF1", cells=10, capillary=value)
+
+
+def test_the_forward_stage_passes_its_capillary_mode_to_every_run():
+    """``Forward(capillary=...)``: the stage's rows are the direct ``simulate`` runs of that mode, which differ from
+    the explicit ones on this capillary-dominated flood (so the parameter is not ignored)."""
+    from spflow.core.stage import StageContext
+    from spflow.plugins.forward.stage import Forward
+
+    experiment = {"name": "WF", "schedule": WATERFLOOD, "params": LOW_RATE}
+    out = {mode: Forward(experiments=[experiment], cells=25, effects=PC_ON, pv_step=0.05, capillary=mode,
+                         max_steps=10**8).run(StageContext("forward", verbose=False))
+           for mode in ("explicit", "adaptive")}
+    for mode, ds in out.items():
+        direct = simulate(WATERFLOOD, LOW_RATE, cells=25, effects=PC_ON, capillary=mode, pv_step=0.05,
+                          max_steps=10**8)
+        np.testing.assert_array_equal(ds["recovery"].values[0, 0], direct.recovery.values)
+    assert np.max(np.abs(out["adaptive"]["recovery"].values - out["explicit"]["recovery"].values)) > 0

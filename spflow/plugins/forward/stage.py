@@ -69,13 +69,14 @@ RESPONSES = DatasetSchema(
 )
 
 
-def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step, max_steps, max_wall_s):
+def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step, max_steps, max_wall_s, capillary):
     """The runs of one sample for every experiment, or the failure reason (str) of the first failing run."""
     runs = []
     for exp in experiments:
         try:
             runs.append(simulate(exp.schedule, dict(fixed, **exp.params, **row), cells=cells, effects=effects,
-                                 scheme=scheme, pv_step=pv_step, max_steps=max_steps or None, max_wall_s=max_wall_s))
+                                 scheme=scheme, pv_step=pv_step, max_steps=max_steps or None, max_wall_s=max_wall_s,
+                                 capillary=capillary))
         except SimulationError as err:
             return f"{exp.name}: {err}"
     return runs
@@ -83,7 +84,7 @@ def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step, max_st
 
 class Forward(Stage):
     name = "forward"
-    version = "3"
+    version = "4"
     description = "SP coreflood simulator over a design and a set of experiments"
     inputs = {"design": DESIGN}
     optional_inputs = frozenset({"design"})
@@ -100,6 +101,9 @@ class Forward(Stage):
                            doc="step budget of each run; 0: simulate's default (50 x the expected steps)"),
         "max_wall_s": Param(float, DEFAULT_MAX_WALL_S, bounds=(1e-3, None), unit="s",
                             doc="wall-time budget of each run"),
+        "capillary": Param(str, "explicit", choices=["explicit", "implicit", "adaptive"],
+                           doc="time discretisation of the capillary flux when capillary_pressure is on (simulate's "
+                               "capillary; docs/forward_model.md)"),
     }
 
     @classmethod
@@ -126,7 +130,7 @@ class Forward(Stage):
                 validate_run(exp.schedule, dict(fixed, **exp.params, **row), self.params["cells"], effects,
                              self.params["scheme"], self.params["pv_step"], None, 0.5)
         args = (self.params["cells"], effects, self.params["scheme"], self.params["pv_step"],
-                self.params["max_steps"], self.params["max_wall_s"])
+                self.params["max_steps"], self.params["max_wall_s"], self.params["capillary"])
         from joblib import delayed
 
         runs = ctx.parallel()(
