@@ -242,7 +242,8 @@ def _step0(g) -> list[dict]:
             ok = np.isfinite(best.gradient) & np.isfinite(x.gradient)
             pair_se = float(np.linalg.norm(best.gradient[ok] - x.gradient[ok]))
         loo = step.loo.get(name, (float("nan"),) * 3)
-        out.append({"name": name, "delta_elpd": x.delta_elpd, "se": x.se, "strength_z": x.strength_z,
+        out.append({"name": name, "delta_elpd": x.delta_elpd, "se": x.se, "strength": x.strength,
+                    "strength_z": x.strength_z,
                     "physical": x.physical, "gap_closed": x.gap_closed, "chi2": step.fits[name].chi2,
                     "passes": passes(x, g.options.rule), "pair_se": pair_se, "delta_loo": loo[0],
                     "delta_loo_se": loo[1], "pareto_k_max": loo[2]})

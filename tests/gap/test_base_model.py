@@ -64,3 +64,22 @@ def test_candidates_off_and_on_in_the_base():
         candidates_for(["gravity"], {})
     with pytest.raises(ParameterError, match="must be distinct"):
         candidates_for(["dispersion", "dispersion"], {})
+
+
+def test_physical_rule_with_a_tolerance_in_posterior_sd():
+    """A strength outside the physical range counts as physical when it lies within ``tolerance`` (unit-box
+    coordinates of the search range) of it; distances computed here by hand from the search range."""
+    cands = {c.name: c for c in candidates_for(None, BaseModel.from_mapping(TABLE_3_2_BASE).effects)}
+    sal = cands["polymer_salinity"]  # linear search range, physical 0.3-1.5
+    span = sal.upper - sal.lower
+    over = 1.5 + 0.1 * span  # 0.1 of the search range above the physical upper bound
+    assert not sal.is_physical(over)
+    assert not sal.is_physical(over, tolerance=0.09)
+    assert sal.is_physical(over, tolerance=0.11)
+    under = 0.3 - 0.05 * span
+    assert sal.is_physical(under, tolerance=0.06) and not sal.is_physical(under, tolerance=0.04)
+    pc = cands["capillary_pressure"]  # log search range, physical 0.1-4
+    weak = 0.05  # log distance to 0.1 in units of the search range's log span
+    dist = np.log(0.1 / weak) / np.log(pc.upper / pc.lower)
+    assert pc.is_physical(weak, tolerance=dist * 1.01) and not pc.is_physical(weak, tolerance=dist * 0.99)
+    assert pc.is_physical(1.0, tolerance=0.0)

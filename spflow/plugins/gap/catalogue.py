@@ -70,9 +70,14 @@ class CandidateEffect:
         """Unit-box coordinate of strength ``s`` (clipped into the search range)."""
         return float(np.clip(value_to_unit(s, self.lower, self.upper, self.log), 0.0, 1.0))
 
-    def is_physical(self, s: float) -> bool:
-        """The physical-strength rule: ``s`` inside the physical range."""
-        return bool(self.physical[0] <= s <= self.physical[1])
+    def is_physical(self, s: float, tolerance: float = 0.0) -> bool:
+        """The physical-strength rule: ``s`` inside the physical range, or at most ``tolerance`` outside it in
+        unit-box coordinates of the search range (the decision rule passes ``physical_tolerance`` times the
+        strength's posterior sd there, docs/gap.md, Method: **Decision**)."""
+        if self.physical[0] <= s <= self.physical[1]:
+            return True
+        v, lo, hi = self.unit(s), self.unit(self.physical[0]), self.unit(self.physical[1])
+        return bool(max(lo - v, v - hi) <= tolerance)
 
 
 def _candidate(name: str, base: float, registry: EffectRegistry) -> CandidateEffect:

@@ -218,11 +218,23 @@ def _slug_names(experiments: Sequence[Experiment]) -> dict[str, list[str]]:
     return {e.name: [slug.name for slug in e.schedule.slugs] for e in experiments}
 
 
+def _strength_sd(f: Fit, tau: float) -> dict[str, float]:
+    """Linearised posterior sd of every freed strength's unit-box coordinate."""
+    cov = parameter_covariance(f.jacobian, tau)
+    return {c.name: float(np.sqrt(cov[f.n_params + j, f.n_params + j])) for j, c in enumerate(f.candidates)}
+
+
 def _strength_z(f: Fit, tau: float) -> dict[str, float]:
     """z of every freed strength against its base strength (linearised posterior sd in the unit box)."""
-    cov = parameter_covariance(f.jacobian, tau)
-    return {c.name: float((f.z[f.n_params + j] - c.unit(c.base)) / np.sqrt(cov[f.n_params + j, f.n_params + j]))
-            for j, c in enumerate(f.candidates)}
+    sd = _strength_sd(f, tau)
+    return {c.name: float((f.z[f.n_params + j] - c.unit(c.base)) / sd[c.name]) for j, c in enumerate(f.candidates)}
+
+
+def _physical(f: Fit, tau: float, rule: Rule) -> dict[str, bool]:
+    """Whether every freed strength is consistent with its physical range: inside it or within
+    ``rule.physical_tolerance`` posterior sd of it (verdict.py)."""
+    sd = _strength_sd(f, tau)
+    return {c.name: c.is_physical(f.strengths[c.name], rule.physical_tolerance * sd[c.name]) for c in f.candidates}
 
 
 def _recalibrate(predictor: Predictor, layout: Layout, start: Fit, options: Options, polish: bool) -> Fit:
@@ -357,7 +369,8 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                       max_nfev=options.max_nfev, diff_step=options.diff_step, economy=options.economy)
             w = out_of_sample(f)
             strengths = f.strengths
-            physical = all(x.is_physical(strengths[x.name]) for x in f.candidates if x.name not in
+            consistent = _physical(f, options.nuisance_scale, options.rule)
+            physical = all(consistent[x.name] for x in f.candidates if x.name not in
                            {n for names in accepted for n in names})
             step.fits[c.name], step.out_of_sample[c.name] = f, w
             loo = psis_loo(f, options.nuisance_scale, options.loo_draws, options.seed)
@@ -424,7 +437,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             if names not in outs:
                 outs[names] = out_of_sample(f)
             return SubsetFit(names, f.chi2, f.strengths, _strength_z(f, options.nuisance_scale),
-                             {c.name: c.is_physical(f.strengths[c.name]) for c in f.candidates}, outs[names])
+                             _physical(f, options.nuisance_scale, options.rule), outs[names])
 
         search = best_subset(pool, evaluate, options.rule, options.max_effects, competitors)
         search_runs = predictor.runs - before

@@ -84,6 +84,9 @@ OPTION_PARAMS = {
     "min_delta": Param(float, 4.0, bounds=(0.0, None), unit="nat", doc="decision rule: minimum ELPD gain"),
     "se_factor": Param(float, 2.0, bounds=(0.0, None), doc="decision rule: gain / standard error"),
     "closed_fraction": Param(float, 0.5, bounds=(0.0, 1.0), doc="fraction of the gap an explanation must close"),
+    "physical_tolerance": Param(float, 2.0, bounds=(0.0, None),
+                                doc="decision rule: posterior sd by which a fitted strength may lie outside its "
+                                    "physical range (0: the estimate must lie inside)"),
 }
 
 
@@ -96,9 +99,9 @@ def options_from(values: dict) -> Options:
     from .numerical_error import DEFAULT_VARIANTS
 
     rule = Rule(values["min_delta"], values["se_factor"], values["closed_fraction"],
-                float(chi2.isf(values["alpha"], 1)))
+                float(chi2.isf(values["alpha"], 1)), values["physical_tolerance"])
     keep = {k: v for k, v in values.items()
-            if k not in ("min_delta", "se_factor", "closed_fraction", "numerical_error")}
+            if k not in ("min_delta", "se_factor", "closed_fraction", "physical_tolerance", "numerical_error")}
     variants = DEFAULT_VARIANTS if values.get("numerical_error", True) else ()
     return Options(**(keep | {"variables": tuple(values["variables"]), "rule": rule,
                               "numerical_variants": variants}))
