@@ -197,13 +197,15 @@ def fit_spflow_kriging(estimator, **options):
 
 
 def fit_sklearn_gp(kernel: str):
-    """scikit-learn's ``GaussianProcessRegressor`` on the inputs mapped onto [-1, 1]^d (spflow's Kriging space):
+    """scikit-learn's ``GaussianProcessRegressor`` on the inputs mapped onto [-1, 1]^d (spflow's Kriging space).
+
     ``ConstantKernel() * RBF`` or ``* Matern(nu=2.5)`` with one length scale per input (``kernel`` "rbf" or
-    "matern52") bounded as spflow's (``LENGTHSCALE_BOUNDS``), ``normalize_y=True``, 2 optimiser restarts (3 runs, as spflow's
-    ``restarts=3``); everything else scikit-learn's default (alpha = 1e-10 on the diagonal). With scikit-learn's
-    default length-scale bounds (1e-5, 1e5) the RBF fits on Ishigami end at ℓ = 1e-5 (white noise, ε_val = 1) from
-    every start. One model per column, BLAS on one thread (spflow's fits run on one). Its reported error is the closed-form LOO of the fitted GP (Rasmussen &
-    Williams 2006, Eq. 5.12), without refitting the hyperparameters."""
+    "matern52") bounded as spflow's (``LENGTHSCALE_BOUNDS``), ``normalize_y=True``, 2 optimiser restarts (3 runs, as
+    spflow's ``restarts=3``); everything else scikit-learn's default (alpha = 1e-10 on the diagonal). With
+    scikit-learn's default length-scale bounds (1e-5, 1e5) the RBF fits on Ishigami end at ℓ = 1e-5 (white noise,
+    ε_val = 1) from every start. One model per column, BLAS on one thread (spflow's fits run on one). Its reported
+    error is the closed-form LOO of the fitted GP (Rasmussen & Williams 2006, Eq. 5.12), without refitting the
+    hyperparameters."""
     def fit(x, y, lower, upper, xv):
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Matern
@@ -213,7 +215,8 @@ def fit_sklearn_gp(kernel: str):
 
         d = x.shape[1]
         z, zv = (2.0 * (a - lower) / (upper - lower) - 1.0 for a in (x, xv))
-        shape = RBF(np.ones(d), LENGTHSCALE_BOUNDS) if kernel == "rbf" else Matern(np.ones(d), LENGTHSCALE_BOUNDS, nu=2.5)
+        bounds = LENGTHSCALE_BOUNDS
+        shape = RBF(np.ones(d), bounds) if kernel == "rbf" else Matern(np.ones(d), bounds, nu=2.5)
         predictions, loo, models = [], [], []
         start = time.process_time()
         with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
@@ -285,7 +288,8 @@ def main() -> None:
                     scored = ~np.isnan(eps)
                     rows.append((np.median(eps[scored]), np.median(loo[scored] / eps[scored]), cpu, degree))
                 eps, ratio, cpu, degree = (statistics.median(c) for c in zip(*rows))
-                print(f"| {problem} | {n} | {n_seeds} | {method} | {'-' if math.isnan(degree) else f'{degree:g}'} | {eps:.2e} | {ratio:.2f} | {cpu:.3f} |",
+                shown = "-" if math.isnan(degree) else f"{degree:g}"
+                print(f"| {problem} | {n} | {n_seeds} | {method} | {shown} | {eps:.2e} | {ratio:.2f} | {cpu:.3f} |",
                       flush=True)
     print(f"# total CPU {time.process_time() - total:.0f} s")
 
