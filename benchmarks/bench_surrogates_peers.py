@@ -20,8 +20,8 @@ Problems, inputs uniform: Ishigami (a = 7, b = 0.1, X ~ U(-π, π)^3); the Sobol
 a = (0, 1, 4.5, 9, 99, 99, 99, 99) on [0, 1]^8; Borehole on the uniform box of Surjanovic & Bingham's library
 (8 inputs); ``simulator``: spflow's forward model, BCF1 on 30 cells over the 9 parameters of thesis Table 3.2, with
 20 outputs (Δp and oil cut at 10 PV points; ``peer_simulator.py``, runs cached under ``--cache``). For each N in
-{50, 100, 200, 400} and 5 seeds (``--simulator-seeds``, default 3, on the simulator: 5 would cost ~9 min of CPU,
-mostly OpenTURNS' 20 fits per design at N = 400), every method gets the same Latin hypercube
+{50, 100, 200, 400} and 5 seeds (``--seeds``; ``--simulator-seeds`` caps them on the simulator, whose table costs
+~8 min of CPU with 5, mostly OpenTURNS' 20 fits per design at N = 400), every method gets the same Latin hypercube
 (``scipy.stats.qmc.LatinHypercube(d, seed=seed)``) and is validated on the same independent uniform points (10^4;
 10^3 simulator runs).
 
@@ -38,7 +38,7 @@ Columns (medians over the output columns of a fit, then over the seeds):
 * ``p``: the median selected (spflow) or fixed (peers) total degree of a PCE ("-" for Kriging).
 
 Not covered (later parts of #24): Sobol-index errors and prediction times, non-uniform inputs, SMT's Kriging. Run with
-``nice -n 10``; the analytic PCE table takes a few minutes of CPU, the simulator's ~5 min (runs ~10 s of it).
+``nice -n 10``; the analytic PCE table takes a few minutes of CPU, the simulator's ~8 min (runs ~35 s of it).
 ``--methods spflow`` times spflow alone (e.g. with another checkout first on PYTHONPATH, for a before/after table).
 """
 
@@ -258,7 +258,7 @@ def main() -> None:
                         help="comma-separated subset of " + ", ".join([*PROBLEMS, "simulator"]))
     parser.add_argument("--sizes", default=None, help="comma-separated training sizes (default 50,100,200,400)")
     parser.add_argument("--seeds", type=int, default=None, help="seeds per N (default 5, --quick 2)")
-    parser.add_argument("--simulator-seeds", type=int, default=3, help="seeds per N on the simulator")
+    parser.add_argument("--simulator-seeds", type=int, default=5, help="at most this many seeds per N on the simulator")
     parser.add_argument("--cache", type=Path, default=Path("/tmp/spflow_bench_peers"),
                         help="directory of the simulator's cached runs (.npz, one per design)")
     args = parser.parse_args()
