@@ -1,32 +1,44 @@
-"""Sparse PCE against its peers (a script, not a test): ``python benchmarks/bench_surrogates_peers.py [--quick]``.
+"""Surrogates against their peers (a script, not a test): ``python benchmarks/bench_surrogates_peers.py [--quick]``.
 
-Issue #24, first part: spflow's default sparse PCE (hybrid LARS, degree- and q-adaptive, :class:`PCE.fit`) against
+Issue #24. Sparse PCE (the default ``--methods``): spflow's default sparse PCE (hybrid LARS, degree- and q-adaptive,
+:class:`PCE.fit`) against
 
 * OpenTURNS (``pip install openturns``, or the ``bench`` extra of pyproject.toml): ``FunctionalChaosAlgorithm`` with
   ``LeastSquaresMetaModelSelectionFactory(LARS(), CorrectedLeaveOneOut())`` on a fixed candidate basis (OpenTURNS does
   not search the degree itself): the largest of spflow's candidate sets A(p, q) — spflow's default q, p <= spflow's
   default ``degree_max`` — within spflow's basis-size limit, given to OpenTURNS as the first |A(p, q)| functions of
-  its ``HyperbolicAnisotropicEnumerateFunction(d, q)`` (the same set: that enumeration orders by q-norm);
+  its ``HyperbolicAnisotropicEnumerateFunction(d, q)`` (the same set: that enumeration orders by q-norm); one fit per
+  output column;
 * chaospy ordinary least squares (``fit_regression``) at a degree fixed before seeing the data: the largest total
   degree whose full basis has at most N/2 terms (two runs per coefficient).
 
-Problems (uniform inputs only): Ishigami (a = 7, b = 0.1, X ~ U(-π, π)^3); the Sobol G-function with d = 8 and
-a = (0, 1, 4.5, 9, 99, 99, 99, 99) on [0, 1]^8; Borehole on the uniform box of Surjanovic & Bingham's library
-(8 inputs). For each N in {50, 100, 200, 400} and 5 seeds, every method gets the same Latin hypercube
-(``scipy.stats.qmc.LatinHypercube(d, seed=seed)``) and is validated on the same 10^4 independent uniform points.
+Kriging (``--methods spflow_gp,spflow_gp_matern,spflow_pck,sklearn_gp_rbf,sklearn_gp_matern``): spflow's ``GP``
+(Gaussian or Matérn 5/2 kernel) and ``PCK`` from :mod:`spflow.surrogates` with their defaults, against
+scikit-learn's ``GaussianProcessRegressor`` (see :func:`fit_sklearn_gp`). One model per output column throughout.
 
-Columns (medians over the seeds):
+Problems, inputs uniform: Ishigami (a = 7, b = 0.1, X ~ U(-π, π)^3); the Sobol G-function with d = 8 and
+a = (0, 1, 4.5, 9, 99, 99, 99, 99) on [0, 1]^8; Borehole on the uniform box of Surjanovic & Bingham's library
+(8 inputs); ``simulator``: spflow's forward model, BCF1 on 30 cells over the 9 parameters of thesis Table 3.2, with
+20 outputs (Δp and oil cut at 10 PV points; ``peer_simulator.py``, runs cached under ``--cache``). For each N in
+{50, 100, 200, 400} and 5 seeds (``--seeds``; ``--simulator-seeds`` caps them on the simulator, whose table costs
+~8 min of CPU with 5, mostly OpenTURNS' 20 fits per design at N = 400), every method gets the same Latin hypercube
+(``scipy.stats.qmc.LatinHypercube(d, seed=seed)``) and is validated on the same independent uniform points (10^4;
+10^3 simulator runs).
+
+Columns (medians over the output columns of a fit, then over the seeds):
 
 * ``eps_val``: validation error, mean squared error / variance of the validation outputs (the form of Eq. 3.8);
-* ``LOO/eps``: the method's own leave-one-out estimate divided by ``eps_val``. spflow: the error the model reports for
-  a calibration (``PCE.error_variance / output_variance``); OpenTURNS: the corrected LOO of the selected basis (the
-  smallest entry of ``getErrorHistory``); chaospy: the plain LOO of the OLS fit from its hat matrix (chaospy has no
-  error estimate; computed here);
-* ``fit CPU``: process CPU time of the fit, seconds (OpenTURNS' own threads included);
-* ``p``: the median selected (spflow) or fixed (peers) total degree.
+  columns whose validation outputs are constant up to round-off are not scored;
+* ``LOO/eps``: the method's own leave-one-out estimate divided by ``eps_val``. spflow PCE: the error the model
+  reports for a calibration (``PCE.error_variance / output_variance``); spflow GP/PCK: their Kriging (Dubrule) LOO;
+  OpenTURNS: the corrected LOO of the selected basis (the smallest entry of ``getErrorHistory``); chaospy: the plain
+  LOO of the OLS fit from its hat matrix (chaospy has no error estimate; computed here); scikit-learn: the
+  closed-form LOO of the fitted GP (computed here);
+* ``fit CPU``: process CPU time of the fit of all columns, seconds (the peers' own threads included);
+* ``p``: the median selected (spflow) or fixed (peers) total degree of a PCE ("-" for Kriging).
 
-Not covered yet (left for later parts of #24): spflow's simulator as a test problem, non-uniform inputs, Kriging
-peers and a library-style ``fit(X, y)`` API. Run with ``nice -n 10``; the full table takes a few minutes of CPU.
+Not covered (later parts of #24): Sobol-index errors and prediction times, non-uniform inputs, SMT's Kriging. Run with
+``nice -n 10``; the analytic PCE table takes a few minutes of CPU, the simulator's ~8 min (runs ~35 s of it).
 ``--methods spflow`` times spflow alone (e.g. with another checkout first on PYTHONPATH, for a before/after table).
 """
 
@@ -40,6 +52,7 @@ import os
 import statistics
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 from scipy.stats import qmc
@@ -48,8 +61,12 @@ from spflow.plugins.surrogates.basis import multi_indices
 from spflow.plugins.surrogates.degree_adaptive import fit_pce
 from spflow.plugins.surrogates.outputs import OutputIndex
 from spflow.plugins.surrogates.pce_model import PCE
+from spflow.plugins.surrogates.regression import is_constant
+from spflow.surrogates import GP, PCK
 
-N_VALIDATION = 10_000
+from peer_simulator import LOWER, UPPER, simulator_outputs
+
+N_VALIDATION = {"ishigami": 10_000, "g_function": 10_000, "borehole": 10_000, "simulator": 1_000}
 VALIDATION_SEED = 20_241_124
 
 
@@ -84,20 +101,26 @@ def spflow_defaults() -> dict:
     return {name: p.default for name, p in params.items() if p.default is not inspect.Parameter.empty}
 
 
-def relative_error(prediction: np.ndarray, truth: np.ndarray) -> float:
-    return float(np.mean((prediction - truth) ** 2) / np.var(truth))
+def relative_errors(prediction: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Per column: validation mean squared error / variance of the validation outputs (the form of Eq. 3.8); NaN for
+    a column whose validation outputs are constant up to round-off (nothing to score)."""
+    spread = np.var(truth, axis=0)
+    error = np.mean((prediction - truth) ** 2, axis=0)
+    return np.where(is_constant(truth), np.nan, error / np.where(spread > 0, spread, 1.0))
 
 
 def fit_spflow(x, y, lower, upper, xv):
-    outputs = OutputIndex(np.array(["y"]), np.array([""]), np.array([np.nan]), {"y": "1"})
+    """spflow's default sparse PCE, all columns of ``y`` (n, m) in one fit (they share the degree and q)."""
+    outputs = OutputIndex.of_array(y.shape[1])
     names = [f"x{k}" for k in range(x.shape[1])]
     start = time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the degree-cap warning is counted from the model's attrs instead
-        model = PCE.fit(names, lower, upper, outputs, x, y[:, None], solver="lars")
+        model = PCE.fit(names, lower, upper, outputs, x, y, solver="lars")
     cpu = time.process_time() - start
-    reported = float(model.error_variance[0] / model.output_variance[0])
-    return model.predict(xv)[0][:, 0], reported, cpu, model.info["degree"]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reported = model.error_variance / model.output_variance
+    return model.predict(xv)[0], reported, cpu, model.info["degree"]
 
 
 def ot_basis(d: int, n: int) -> tuple[int, int]:
@@ -114,27 +137,32 @@ def ot_basis(d: int, n: int) -> tuple[int, int]:
 
 
 def fit_openturns(x, y, lower, upper, xv):
+    """OpenTURNS' LARS PCE with corrected LOO on spflow's largest candidate set, one fit per column of ``y``."""
     import openturns as ot
 
     ot.Log.Show(ot.Log.NONE)
     d = x.shape[1]
     degree, size = ot_basis(d, x.shape[0])
+    predictions, loo = [], []
     start = time.process_time()
     distribution = ot.JointDistribution([ot.Uniform(float(a), float(b)) for a, b in zip(lower, upper)])
     enum = ot.HyperbolicAnisotropicEnumerateFunction(d, float(spflow_defaults()["q"]))
     basis = ot.OrthogonalProductPolynomialFactory([ot.LegendreFactory()] * d, enum)
-    selection = ot.LeastSquaresMetaModelSelectionFactory(ot.LARS(), ot.CorrectedLeaveOneOut())
-    algo = ot.FunctionalChaosAlgorithm(ot.Sample(x), ot.Sample(y[:, None]), distribution,
-                                       ot.FixedStrategy(basis, size),
-                                       ot.LeastSquaresStrategy(selection))
-    algo.run()
-    result = algo.getResult()
+    for column in y.T:
+        selection = ot.LeastSquaresMetaModelSelectionFactory(ot.LARS(), ot.CorrectedLeaveOneOut())
+        algo = ot.FunctionalChaosAlgorithm(ot.Sample(x), ot.Sample(column[:, None]), distribution,
+                                           ot.FixedStrategy(basis, size), ot.LeastSquaresStrategy(selection))
+        algo.run()
+        result = algo.getResult()
+        loo.append(float(np.min(np.asarray(result.getErrorHistory()))))
+        predictions.append(result.getMetaModel())
     cpu = time.process_time() - start
-    loo = float(np.min(np.asarray(result.getErrorHistory())))
-    return np.asarray(result.getMetaModel()(ot.Sample(xv)))[:, 0], loo, cpu, degree
+    xv = ot.Sample(xv)
+    return np.column_stack([np.asarray(m(xv))[:, 0] for m in predictions]), np.array(loo), cpu, degree
 
 
 def fit_chaospy(x, y, lower, upper, xv):
+    """chaospy OLS on the full total-degree basis, all columns of ``y`` (n, m) on the same basis."""
     import chaospy
 
     d, n = x.shape[1], x.shape[0]
@@ -149,42 +177,120 @@ def fit_chaospy(x, y, lower, upper, xv):
     psi = np.asarray(expansion(*x.T)).T
     q, _ = np.linalg.qr(psi)
     leverage = np.sum(q**2, axis=1)
-    residual = y - np.asarray(model(*x.T))
-    loo = float(np.mean((residual / (1.0 - leverage)) ** 2) / np.var(y))
-    return np.asarray(model(*xv.T)), loo, cpu, degree
+    residual = y - np.asarray(model(*x.T)).T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        loo = np.mean((residual / (1.0 - leverage[:, None])) ** 2, axis=0) / np.var(y, axis=0)
+    return np.asarray(model(*xv.T)).T.reshape(xv.shape[0], -1), loo, cpu, degree
 
 
-METHODS = {"spflow": fit_spflow, "openturns": fit_openturns, "chaospy": fit_chaospy}
+def fit_spflow_kriging(estimator, **options):
+    """spflow's GP or PC-Kriging (``spflow.surrogates``) with ``options`` over its defaults, one model per column
+    (``share="output"``, the default); its reported error is the Kriging (Dubrule) LOO."""
+    def fit(x, y, lower, upper, xv):
+        start = time.process_time()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # PCK's degree-3 trend cap
+            model = estimator(np.column_stack([lower, upper]), **options).fit(x, y)
+        cpu = time.process_time() - start
+        return model.predict(xv), np.atleast_1d(model.loo_error_), cpu, math.nan
+    return fit
+
+
+def fit_sklearn_gp(kernel: str):
+    """scikit-learn's ``GaussianProcessRegressor`` on the inputs mapped onto [-1, 1]^d (spflow's Kriging space).
+
+    ``ConstantKernel() * RBF`` or ``* Matern(nu=2.5)`` with one length scale per input (``kernel`` "rbf" or
+    "matern52") bounded as spflow's (``LENGTHSCALE_BOUNDS``), ``normalize_y=True``, 2 optimiser restarts (3 runs, as
+    spflow's ``restarts=3``); everything else scikit-learn's default (alpha = 1e-10 on the diagonal). With
+    scikit-learn's default length-scale bounds (1e-5, 1e5) the RBF fits on Ishigami end at ℓ = 1e-5 (white noise,
+    ε_val = 1) from every start. One model per column, BLAS on one thread (spflow's fits run on one). Its reported
+    error is the closed-form LOO of the fitted GP (Rasmussen & Williams 2006, Eq. 5.12), without refitting the
+    hyperparameters."""
+    def fit(x, y, lower, upper, xv):
+        from sklearn.gaussian_process import GaussianProcessRegressor
+        from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Matern
+        from threadpoolctl import threadpool_limits
+
+        from spflow.plugins.surrogates.kriging_likelihood import LENGTHSCALE_BOUNDS
+
+        d = x.shape[1]
+        z, zv = (2.0 * (a - lower) / (upper - lower) - 1.0 for a in (x, xv))
+        bounds = LENGTHSCALE_BOUNDS
+        shape = RBF(np.ones(d), bounds) if kernel == "rbf" else Matern(np.ones(d), bounds, nu=2.5)
+        predictions, loo, models = [], [], []
+        start = time.process_time()
+        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # ConvergenceWarning at a bound
+            for column in y.T:
+                gp = GaussianProcessRegressor(ConstantKernel() * shape, normalize_y=True, n_restarts_optimizer=2,
+                                              random_state=0)
+                models.append(gp.fit(z, column))
+        cpu = time.process_time() - start
+        for gp, column in zip(models, y.T):
+            inverse = np.linalg.inv(gp.kernel_(z) + gp.alpha * np.eye(z.shape[0]))
+            scaled = (column - column.mean()) / column.std()  # normalize_y's scaling
+            residual = (inverse @ scaled) / np.diag(inverse) * column.std()
+            loo.append(float(np.mean(residual**2) / np.var(column)))
+            predictions.append(gp.predict(zv))
+        return np.column_stack(predictions), np.array(loo), cpu, math.nan
+    return fit
+
+
+METHODS = {"spflow": fit_spflow, "openturns": fit_openturns, "chaospy": fit_chaospy,
+           "spflow_gp": fit_spflow_kriging(GP), "spflow_gp_matern": fit_spflow_kriging(GP, kernel="matern52"),
+           "spflow_pck": fit_spflow_kriging(PCK), "sklearn_gp_rbf": fit_sklearn_gp("rbf"),
+           "sklearn_gp_matern": fit_sklearn_gp("matern52")}
+PCE_METHODS = "spflow,openturns,chaospy"
+
+
+def problems(cache: Path) -> dict:
+    """name -> (function of x (n, d) giving y (n, m), lower, upper)."""
+    table = {name: (lambda x, f=func: f(x)[:, None], lower, upper) for name, (func, lower, upper) in PROBLEMS.items()}
+    table["simulator"] = (lambda x: simulator_outputs(x, cache), LOWER, UPPER)
+    return table
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="2 seeds, N in {50, 200}")
-    parser.add_argument("--methods", default=",".join(METHODS), help="comma-separated subset of " + ", ".join(METHODS))
-    parser.add_argument("--problems", default=",".join(PROBLEMS), help="comma-separated subset of problems")
+    parser.add_argument("--methods", default=PCE_METHODS, help="comma-separated subset of " + ", ".join(METHODS))
+    parser.add_argument("--problems", default=",".join([*PROBLEMS, "simulator"]),
+                        help="comma-separated subset of " + ", ".join([*PROBLEMS, "simulator"]))
+    parser.add_argument("--sizes", default=None, help="comma-separated training sizes (default 50,100,200,400)")
+    parser.add_argument("--seeds", type=int, default=None, help="seeds per N (default 5, --quick 2)")
+    parser.add_argument("--simulator-seeds", type=int, default=5, help="at most this many seeds per N on the simulator")
+    parser.add_argument("--cache", type=Path, default=Path("/tmp/spflow_bench_peers"),
+                        help="directory of the simulator's cached runs (.npz, one per design)")
     args = parser.parse_args()
     methods = args.methods.split(",")
-    sizes, seeds = ((50, 200), range(2)) if args.quick else ((50, 100, 200, 400), range(5))
+    sizes, seeds = ((50, 200), 2) if args.quick else ((50, 100, 200, 400), 5)
+    sizes = tuple(int(n) for n in args.sizes.split(",")) if args.sizes else sizes
+    seeds = args.seeds or seeds
+    table = problems(args.cache)
     print(f"# {datetime.date.today()}; spflow fit_pce defaults {spflow_defaults()}; "
-          f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs; medians over {len(seeds)} seeds")
-    print("| problem | N | method | p | eps_val | LOO/eps | fit CPU (s) |")
-    print("|---|---|---|---|---|---|---|")
+          f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs; medians over outputs, then over seeds")
+    print("| problem | N | seeds | method | p | eps_val | LOO/eps | fit CPU (s) |")
+    print("|---|---|---|---|---|---|---|---|")
     total = time.process_time()
     for problem in args.problems.split(","):
-        func, lower, upper = PROBLEMS[problem]
+        func, lower, upper = table[problem]
         d = lower.size
-        xv = lower + (upper - lower) * np.random.default_rng(VALIDATION_SEED).random((N_VALIDATION, d))
+        xv = lower + (upper - lower) * np.random.default_rng(VALIDATION_SEED).random((N_VALIDATION[problem], d))
         yv = func(xv)
+        n_seeds = min(args.simulator_seeds, seeds) if problem == "simulator" else seeds
         for n in sizes:
             for method in methods:
                 rows = []
-                for seed in seeds:
+                for seed in range(n_seeds):
                     x = lower + (upper - lower) * qmc.LatinHypercube(d=d, seed=seed).random(n)
                     prediction, loo, cpu, degree = METHODS[method](x, func(x), lower, upper, xv)
-                    eps = relative_error(prediction, yv)
-                    rows.append((eps, loo / eps, cpu, degree))
+                    eps = relative_errors(prediction, yv)
+                    scored = ~np.isnan(eps)
+                    rows.append((np.median(eps[scored]), np.median(loo[scored] / eps[scored]), cpu, degree))
                 eps, ratio, cpu, degree = (statistics.median(c) for c in zip(*rows))
-                print(f"| {problem} | {n} | {method} | {degree:g} | {eps:.2e} | {ratio:.2f} | {cpu:.3f} |", flush=True)
+                shown = "-" if math.isnan(degree) else f"{degree:g}"
+                print(f"| {problem} | {n} | {n_seeds} | {method} | {shown} | {eps:.2e} | {ratio:.2f} | {cpu:.3f} |",
+                      flush=True)
     print(f"# total CPU {time.process_time() - total:.0f} s")
 
 

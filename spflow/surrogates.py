@@ -39,7 +39,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.contract import Surrogate, input_box
 from spflow.plugins.surrogates.degree_adaptive import DEGREE_MAX, MAX_TERMS_RATIO
-from spflow.plugins.surrogates.kriging_surrogate import RESTARTS
+from spflow.plugins.surrogates.kriging_surrogate import NUGGET, RESTARTS
 from spflow.plugins.surrogates.input_marginals import Beta, LogNormal, Marginal, Normal, TruncatedNormal, Uniform
 from spflow.plugins.surrogates.outputs import OutputIndex
 
@@ -278,7 +278,7 @@ class GP(_Kriging):
     """
 
     def __init__(self, bounds=None, *, inputs=None, names=None, kernel: str = "gaussian", share: str = "output",
-                 nugget: float = 1e-8, restarts: int = RESTARTS, seed: int = 0, n_jobs: int = 1):
+                 nugget: float = NUGGET, restarts: int = RESTARTS, seed: int = 0, n_jobs: int = 1):
         self.bounds, self.inputs, self.names = bounds, inputs, names
         self.kernel, self.share, self.nugget, self.restarts, self.seed = kernel, share, nugget, restarts, seed
         self.n_jobs = n_jobs
@@ -298,7 +298,7 @@ class PCK(_TrendSobol, _Kriging):
     """
 
     def __init__(self, bounds=None, *, inputs=None, names=None, degree_max: int = 3, q: float = 0.9,
-                 mode: str = "sequential", kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
+                 mode: str = "sequential", kernel: str = "gaussian", share: str = "output", nugget: float = NUGGET,
                  restarts: int = RESTARTS, seed: int = 0, n_jobs: int = 1):
         self.bounds, self.inputs, self.names = bounds, inputs, names
         self.degree_max, self.q, self.mode = degree_max, q, mode

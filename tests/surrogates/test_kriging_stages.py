@@ -41,7 +41,7 @@ def test_pipeline_swaps_pce_for_pck_and_gp(tmp_path):
         model = load_surrogate(ds)
         mean, var = model.predict(train.x)
         scale = train.y.std(axis=0).max()
-        # near-interpolation: the nugget (1e-8) leaves a residual ~ nugget x ||R^-1 y||, which reaches ~1e-3 of the
+        # near-interpolation: the nugget (default NUGGET) leaves a residual ~ nugget x ||R^-1 y||, which reaches ~1e-3 of the
         # scale when the fitted length-scales are long (the GP picked 6-11 unit-box lengths on these 14 runs)
         np.testing.assert_allclose(mean, train.y, atol=3e-3 * scale)
         mean_t, var_t = model.predict(test.x)

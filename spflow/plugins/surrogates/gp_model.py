@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kriging_surrogate import RESTARTS, KrigingSurrogate
+from .kriging_surrogate import NUGGET, RESTARTS, KrigingSurrogate
 from .outputs import OutputIndex
 
 __all__ = ["GP"]
@@ -21,7 +21,7 @@ class GP(KrigingSurrogate):
 
     @classmethod
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
-            y: np.ndarray, *, kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8,
+            y: np.ndarray, *, kernel: str = "gaussian", share: str = "output", nugget: float = NUGGET,
             restarts: int = RESTARTS, seed: int = 0, parallel=None, progress=None, inputs=None) -> GP:
         """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m); the inputs are uniform on the box
         unless ``inputs`` gives their marginals (:mod:`.input_marginals`): the kernel then acts on their reference

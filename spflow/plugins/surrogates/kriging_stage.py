@@ -18,7 +18,7 @@ from spflow.plugins.forward.stage import RESPONSES
 from .contract import STORED_SURROGATE, with_parameter_units
 from .gp_model import GP
 from .kriging import KERNELS
-from .kriging_surrogate import RESTARTS, SHARING
+from .kriging_surrogate import NUGGET, RESTARTS, SHARING
 from .pce_stage import PCE_PARAMS, check_lists
 from .pck_model import PCK
 from .pck_modes import MODES
@@ -37,7 +37,7 @@ KRIGING_PARAMS = {
     "restarts": Param(int, RESTARTS, bounds=(1, 100),
                       doc="L-BFGS-B starts of the likelihood maximisation (Eq. 3.21)"),
     "seed": Param(int, 0, bounds=(0, 2**32 - 1), doc="seed of the random restarts"),
-    "nugget": Param(float, 1e-8, bounds=(0.0, 0.1), doc="added to the correlation matrix's diagonal"),
+    "nugget": Param(float, NUGGET, bounds=(0.0, 0.1), doc="added to the correlation matrix's diagonal"),
 }
 
 
@@ -63,8 +63,8 @@ class _KrigingStage(Stage):
 class PCKStage(_KrigingStage):
     name = "pck"
     # 2: the trend's hybrid LARS ranks by the LASSO-modified path (issue #24); 3: + UDUNITS units per element; 4: the
-    # space's marginals honoured and recorded (issue #24)
-    version = "4"
+    # space's marginals honoured and recorded (issue #24); 5: nugget 1e-8 -> 1e-12, length scales up to 10^4 (#24)
+    version = "5"
     description = "PC-Kriging proxy (universal Kriging on a hybrid-LARS polynomial-chaos trend, ML length scales)"
     params = {
         **KRIGING_PARAMS,
@@ -81,7 +81,9 @@ class PCKStage(_KrigingStage):
 
 class GPStage(_KrigingStage):
     name = "gp"
-    version = "3"  # 3: the space's marginals honoured (kernel in their reference variables) and recorded
+    # 3: the space's marginals honoured (kernel in their reference variables) and recorded; 4: nugget 1e-8 -> 1e-12,
+    # length scales up to 10^4 (issue #24)
+    version = "4"
     description = "plain Gaussian-process proxy (ordinary Kriging, ML length scales)"
     params = KRIGING_PARAMS
 

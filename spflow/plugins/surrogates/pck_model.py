@@ -14,7 +14,7 @@ import xarray as xr
 from . import sobol_from_pce as sobol
 from .contract import reference_points, resolve_inputs
 from .degree_adaptive import fit_pce
-from .kriging_surrogate import RESTARTS, KrigingSurrogate, output_groups
+from .kriging_surrogate import NUGGET, RESTARTS, KrigingSurrogate, output_groups
 from .outputs import OutputIndex
 
 __all__ = ["PCK"]
@@ -29,7 +29,7 @@ class PCK(KrigingSurrogate):
     @classmethod
     def fit(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex, x: np.ndarray,
             y: np.ndarray, *, degree_max: int = 3, q: float = 0.9, mode: str = "sequential",
-            kernel: str = "gaussian", share: str = "output", nugget: float = 1e-8, restarts: int = RESTARTS,
+            kernel: str = "gaussian", share: str = "output", nugget: float = NUGGET, restarts: int = RESTARTS,
             seed: int = 0, parallel=None, progress=None, inputs=None) -> PCK:
         """Fit on points ``x`` (N, d) in physical units and outputs ``y`` (N, m); the inputs are uniform on the box
         unless ``inputs`` gives their marginals (:mod:`.input_marginals`): the trend is then a PCE on their
