@@ -16,8 +16,8 @@ from surrogate_kind_plugin import surrogate_kinds_registered
     ("pce", {"degree_max": 3}, None),
     ("pce", {"degree_max": 3, "solver": "lars"}, None),
     # the ML length scales of this smooth problem are 10-50 box widths, so the correlation matrix is near-singular and
-    # the 1e-8 nugget leaves misses of ~1e-3 of the spread at the training points: the GP reports them as variance
-    # (the check's variance rule), but it is not held to an interpolation tolerance
+    # the nugget can leave misses at the training points (~1e-3 of the spread with the former 1e-8 nugget): the GP
+    # reports them as variance (the check's variance rule), but it is not held to an interpolation tolerance
     ("gp", {"restarts": 1}, None),
     ("pck", {"restarts": 1}, 1e-5),
 ])
