@@ -314,14 +314,14 @@ def test_a_dataset_without_marginals_loads_as_uniform_and_says_so():
 
 # -- bad input --------------------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("build, match", [
-    (lambda: Normal(0.0, 0.0), r"Normal: std must be > 0, got 0"),
-    (lambda: Normal(np.nan, 1.0), r"Normal: mean must be a finite number"),
-    (lambda: LogNormal(0.0, -1.0), r"LogNormal: sigma must be > 0"),
+    (lambda: Normal(0.0, 0.0), r"Normal: std = 0.0 is out of range; allowed \(0, inf\)"),
+    (lambda: Normal(np.nan, 1.0), r"Normal: mean = nan must be finite"),
+    (lambda: LogNormal(0.0, -1.0), r"LogNormal: sigma = -1.0 is out of range; allowed \(0, inf\)"),
     (lambda: Uniform(1.0, 0.0), r"Uniform: lower must be < upper, got lower = 1, upper = 0"),
-    (lambda: Beta(0.0, 1.0), r"Beta: alpha must be > 0, got 0"),
+    (lambda: Beta(0.0, 1.0), r"Beta: alpha = 0.0 is out of range; allowed \(0, inf\)"),
     (lambda: Beta(1.0, 2.0, 3.0, 3.0), r"Beta: lower must be < upper"),
     (lambda: TruncatedNormal(0.0, 1.0, 40.0, 41.0), r"TruncatedNormal: \[lower, upper\] = \[40, 41\] holds"),
-    (lambda: TruncatedNormal(0.0, "a", 0.0, 1.0), r"TruncatedNormal: std must be a finite number"),
+    (lambda: TruncatedNormal(0.0, "a", 0.0, 1.0), r"TruncatedNormal: std must be a number in \(0, inf\), got 'a'"),
     (lambda: marginal_from_record("gamma", "{}"), r"input distribution 'gamma' is not known"),
     (lambda: marginal_from_record("normal", '{"mean": 1}'), r"normal input needs the parameters \['mean', 'std'\]"),
 ])

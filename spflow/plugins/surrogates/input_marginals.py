@@ -32,12 +32,14 @@ Every marginal records itself as a family name and a dict of named parameters (:
 from __future__ import annotations
 
 import json
+import math
 from abc import ABC, abstractmethod
 from typing import ClassVar
 
 import numpy as np
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.forward.checks import check_number
 
 from .orthonormal_polynomials import HERMITE, LEGENDRE, PolynomialFamily, jacobi, truncated_hermite
 
@@ -53,22 +55,12 @@ PARAMETERS_LONG_NAME = ("JSON object of the marginal's parameters: mean, std, lo
 
 def _number(owner: str, field: str, value) -> float:
     """``value`` as a finite float, or a ParameterError naming ``owner``'s ``field``."""
-    if isinstance(value, bool):
-        raise ParameterError(f"{owner}: {field} must be a finite number, got {value!r}")
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{owner}: {field} must be a finite number, got {value!r}") from None
-    if not np.isfinite(out):
-        raise ParameterError(f"{owner}: {field} must be a finite number, got {value!r}")
-    return out
+    return check_number(f"{owner}: {field}", value, -math.inf, math.inf)
 
 
 def _positive(owner: str, field: str, value) -> float:
-    out = _number(owner, field, value)
-    if not out > 0.0:
-        raise ParameterError(f"{owner}: {field} must be > 0, got {out:g}")
-    return out
+    """``value`` as a finite float > 0, or a ParameterError naming ``owner``'s ``field``."""
+    return check_number(f"{owner}: {field}", value, 0.0, math.inf, lower_open=True)
 
 
 def _interval(owner: str, lower, upper) -> tuple[float, float]:
