@@ -368,7 +368,6 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             f = refit(predictor, layout_fit, fitting, c, base_fit.start[: base_fit.n_params],
                       max_nfev=options.max_nfev, diff_step=options.diff_step, economy=options.economy)
             w = out_of_sample(f)
-            strengths = f.strengths
             consistent = _physical(f, options.nuisance_scale, options.rule)
             physical = all(consistent[x.name] for x in f.candidates if x.name not in
                            {n for names in accepted for n in names})
