@@ -33,8 +33,8 @@ from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError, SchemaError
 
 from .blas import single_threaded_blas
-from .contract import Surrogate, reference_points, resolve_inputs
-from .input_marginals import check_support
+from .contract import Surrogate, input_box, reference_points, resolve_inputs
+from .input_marginals import Marginal, check_support
 from .kriging import KERNELS, UniversalKriging
 from .outputs import OutputIndex
 from .pck_modes import MODES, fit_group
@@ -91,8 +91,8 @@ class KrigingSurrogate(Surrogate):
                  input_note: str = ""):
         from .basis import design_matrix  # numba: on first use
 
-        lower, upper, x, y = self.check_training(names, lower, upper, outputs, x, y, inputs)
-        super().__init__(names, lower, upper, outputs, inputs, input_note)
+        marginals, x, y = self.check_training(names, lower, upper, outputs, x, y, inputs)
+        super().__init__(names, lower, upper, outputs, marginals, input_note)
         self.x, self.y = x, y
         self.indices = np.ascontiguousarray(indices, dtype=np.int64)
         self.trend = np.asarray(trend, dtype=bool)
@@ -156,10 +156,9 @@ class KrigingSurrogate(Surrogate):
 
     @classmethod
     def check_training(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
-                       x: np.ndarray, y: np.ndarray, inputs=None) -> tuple[np.ndarray, ...]:
-        """``lower``, ``upper``, ``x`` (n, d), ``y`` (n, m) as float arrays; shapes, finiteness and the box checked
-        (the supports of the marginals ``inputs``, when given)."""
-        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+                       x: np.ndarray, y: np.ndarray, inputs=None) -> tuple[list[Marginal], np.ndarray, np.ndarray]:
+        """The inputs' marginals (:func:`.contract.resolve_inputs`: ``inputs``, or uniform on the box), ``x`` (n, d)
+        and ``y`` (n, m) as float arrays; shapes, finiteness and the box (the supports of the marginals) checked."""
         x = np.atleast_2d(np.asarray(x, dtype=float))
         y = np.asarray(y, dtype=float)
         y = y[:, None] if y.ndim == 1 else y
@@ -171,16 +170,15 @@ class KrigingSurrogate(Surrogate):
             raise ParameterError(f"{cls.label}: need at least 3 training points, got {x.shape[0]}")
         if not (np.isfinite(x).all() and np.isfinite(y).all()):
             raise ParameterError(f"{cls.label}: training x and y must be finite")
-        if lower.shape != (d,) or upper.shape != (d,) or not np.all(lower < upper):
-            raise ParameterError(f"{cls.label}: bounds must satisfy lower < upper for each of the {d} parameters")
+        marginals = resolve_inputs(names, lower, upper, inputs, cls.label)
         if inputs is not None:
-            check_support(resolve_inputs(names, lower, upper, inputs, cls.label), names, x,
-                          f"{cls.label}: training points")
-            return lower, upper, x, y
+            check_support(marginals, names, x, f"{cls.label}: training points")
+            return marginals, x, y
+        lower, upper = input_box(marginals)
         slack = 1e-9 * (upper - lower)
         if ((x < lower - slack) | (x > upper + slack)).any():
             raise ParameterError(f"{cls.label}: training points must lie in the box lower={lower}, upper={upper}")
-        return lower, upper, x, y
+        return marginals, x, y
 
     @classmethod
     def fit_trends(cls, names: list[str], lower: np.ndarray, upper: np.ndarray, outputs: OutputIndex,
@@ -198,11 +196,10 @@ class KrigingSurrogate(Surrogate):
         from .basis import design_matrix
 
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
-        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y, inputs)
+        marginals, x, y = cls.check_training(names, lower, upper, outputs, x, y, inputs)
         if len(orders) != y.shape[1]:
             raise ParameterError(f"{cls.label}: need one trend order per output ({y.shape[1]}), got {len(orders)}")
         group = output_groups(outputs, share)
-        marginals = resolve_inputs(names, lower, upper, inputs, cls.label)
         z = reference_points(marginals, x)
         basis = design_matrix(z, indices, [m.polynomials for m in marginals])
         seeds = np.random.SeedSequence(seed).generate_state(group.max() + 1)
@@ -227,7 +224,7 @@ class KrigingSurrogate(Surrogate):
             lengthscale[g] = lengths
         info = {"mode": mode, "share": share, "restarts": restarts, "seed": seed, **(info or {})}
         return cls(names, lower, upper, outputs, x, y, indices, trend, group, lengthscale,
-                   np.full(len(jobs), float(nugget)), kernel, info, inputs)
+                   np.full(len(jobs), float(nugget)), kernel, info, marginals)
 
     # -- prediction -------------------------------------------------------------------------------------------------
     def _predict(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -12,7 +12,7 @@ import numpy as np
 import xarray as xr
 
 from . import sobol_from_pce as sobol
-from .contract import reference_points, resolve_inputs
+from .contract import reference_points
 from .degree_adaptive import fit_pce
 from .kriging_surrogate import NUGGET, RESTARTS, KrigingSurrogate, output_groups
 from .outputs import OutputIndex
@@ -38,9 +38,8 @@ class PCK(KrigingSurrogate):
         from .lars import hybrid_lars_outputs
 
         cls.check_options(mode=mode, kernel=kernel, share=share, nugget=nugget, restarts=restarts)
-        lower, upper, x, y = cls.check_training(names, lower, upper, outputs, x, y, inputs)
+        marginals, x, y = cls.check_training(names, lower, upper, outputs, x, y, inputs)
         output_groups(outputs, share)  # a share="variable" with nothing to share refuses before the trend is fitted
-        marginals = resolve_inputs(names, lower, upper, inputs, cls.label)
         families = [m.polynomials for m in marginals]
         z = reference_points(marginals, x)
         pce = fit_pce(z, y, degree_max=degree_max, q=q, solver="lars", parallel=parallel, families=families)
@@ -50,7 +49,7 @@ class PCK(KrigingSurrogate):
         info = {"pce_degree": pce.degree, "pce_q": pce.q, "pce_loo_mean": pce.loo_mean}
         return cls.fit_trends(names, lower, upper, outputs, x, y, pce.indices[used], orders, mode=mode,
                               kernel=kernel, share=share, nugget=nugget, restarts=restarts, seed=seed,
-                              parallel=parallel, info=info, progress=progress, inputs=inputs)
+                              parallel=parallel, info=info, progress=progress, inputs=marginals)
 
     def sobol(self) -> xr.Dataset:
         """First-order and total Sobol indices of the Kriging *trend* Σ β̂_α Ψ_α (orthonormal under the input marginals,
