@@ -39,8 +39,9 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.contract import Surrogate, input_box
 from spflow.plugins.surrogates.degree_adaptive import DEGREE_MAX, MAX_TERMS_RATIO
+from spflow.plugins.surrogates.input_marginals import (Beta, LogNormal, Marginal, Normal, TruncatedNormal, Uniform,
+                                                     first_outside)
 from spflow.plugins.surrogates.kriging_surrogate import NUGGET, RESTARTS
-from spflow.plugins.surrogates.input_marginals import Beta, LogNormal, Marginal, Normal, TruncatedNormal, Uniform
 from spflow.plugins.surrogates.outputs import OutputIndex
 
 __all__ = ["PCE", "GP", "PCK", "SobolIndices", "SurrogateRegressor", "Uniform", "Normal", "LogNormal",
@@ -121,12 +122,11 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
             raise ParameterError(f"{name}: {argument}[{i}, {j}] = {X[i, j]}; {argument} must be finite, column {j} "
                                  f"in bounds[{j}] = [{lower[j]:g}, {upper[j]:g}]")
         if inputs is not None:
-            for j, marginal in enumerate(inputs):
-                bad = np.flatnonzero(~marginal.contains(X[:, j]))
-                if bad.size:
-                    i = int(bad[0])
-                    raise ParameterError(f"{name}: {argument}[{i}, {j}] = {X[i, j]:g} lies outside the support "
-                                         f"{marginal.support_text()} of inputs[{j}] = {marginal!r}")
+            outside = first_outside(inputs, X)
+            if outside is not None:
+                i, j = outside
+                raise ParameterError(f"{name}: {argument}[{i}, {j}] = {X[i, j]:g} lies outside the support "
+                                     f"{inputs[j].support_text()} of inputs[{j}] = {inputs[j]!r}")
             return np.clip(X, lower, upper)
         slack = 1e-9 * (upper - lower)
         bad = np.argwhere((X < lower - slack) | (X > upper + slack))

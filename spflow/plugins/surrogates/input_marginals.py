@@ -44,7 +44,7 @@ from spflow.plugins.forward.checks import check_number
 from .orthonormal_polynomials import HERMITE, LEGENDRE, PolynomialFamily, jacobi, truncated_hermite
 
 __all__ = ["Marginal", "Uniform", "Normal", "LogNormal", "TruncatedNormal", "Beta", "MARGINALS",
-           "marginal_from_record", "check_support", "marginal_variables", "marginals_from_dataset",
+           "marginal_from_record", "check_support", "first_outside", "marginal_variables", "marginals_from_dataset",
            "DISTRIBUTION_LONG_NAME", "PARAMETERS_LONG_NAME"]
 
 #: CF long names of the two string variables (along ``param``) that record the marginals in a Dataset.
@@ -323,12 +323,21 @@ def marginals_from_dataset(ds, where: str) -> list[Marginal] | None:
             for n, f, p in zip(names, ds["distribution"].values, ds["distribution_parameters"].values)]
 
 
-def check_support(inputs, names: list[str], x: np.ndarray, what: str) -> None:
-    """ParameterError naming ``what``, the point, the parameter and its marginal when a value of ``x`` (n, d) lies
-    outside the support of its marginal (:meth:`Marginal.contains`)."""
-    for j, (name, marginal) in enumerate(zip(names, inputs)):
+def first_outside(inputs, x: np.ndarray) -> tuple[int, int] | None:
+    """(point, column) of the first value of ``x`` (n, d) outside the support of its column's marginal
+    (:meth:`Marginal.contains`), or None."""
+    for j, marginal in enumerate(inputs):
         bad = np.flatnonzero(~marginal.contains(x[:, j]))
         if bad.size:
-            i = int(bad[0])
-            raise ParameterError(f"{what}: point {i} has {name} = {x[i, j]:g}, outside the support "
-                                 f"{marginal.support_text()} of its input distribution {marginal!r}")
+            return int(bad[0]), j
+    return None
+
+
+def check_support(inputs, names: list[str], x: np.ndarray, what: str) -> None:
+    """ParameterError naming ``what``, the point, the parameter and its marginal when a value of ``x`` (n, d) lies
+    outside the support of its marginal (:func:`first_outside`)."""
+    outside = first_outside(inputs, x)
+    if outside is not None:
+        i, j = outside
+        raise ParameterError(f"{what}: point {i} has {names[j]} = {x[i, j]:g}, outside the support "
+                             f"{inputs[j].support_text()} of its input distribution {inputs[j]!r}")
