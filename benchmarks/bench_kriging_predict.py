@@ -18,15 +18,10 @@ from scipy.stats import qmc
 
 from spflow.surrogates import GP, PCK
 
-#: Borehole inputs: rw, r, Tu, Hu, Tl, Hl, L, Kw.
-BOREHOLE = [(0.05, 0.15), (100, 50000), (63070, 115600), (990, 1110), (63.1, 116), (700, 820), (1120, 1680),
-            (9855, 12045)]
+from analytic_functions import PROBLEMS, borehole
 
-
-def borehole(x: np.ndarray) -> np.ndarray:
-    rw, r, tu, hu, tl, hl, length, kw = x.T
-    log_ratio = np.log(r / rw)
-    return 2 * np.pi * tu * (hu - hl) / (log_ratio * (1 + 2 * length * tu / (log_ratio * rw**2 * kw) + tu / tl))
+#: Borehole's input box, (lower, upper) per input rw, r, Tu, Hu, Tl, Hl, L, Kw.
+BOREHOLE = np.column_stack(PROBLEMS["borehole"][1:])
 
 
 def cpu(call, repeat: int) -> float:

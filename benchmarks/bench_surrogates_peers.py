@@ -65,34 +65,10 @@ from spflow.plugins.surrogates.regression import is_constant
 from spflow.surrogates import GP, PCK
 
 from peer_simulator import LOWER, UPPER, simulator_outputs
+from analytic_functions import PROBLEMS
 
 N_VALIDATION = {"ishigami": 10_000, "g_function": 10_000, "borehole": 10_000, "simulator": 1_000}
 VALIDATION_SEED = 20_241_124
-
-
-def ishigami(x: np.ndarray) -> np.ndarray:
-    return np.sin(x[:, 0]) + 7.0 * np.sin(x[:, 1]) ** 2 + 0.1 * x[:, 2] ** 4 * np.sin(x[:, 0])
-
-
-G_A = np.array([0.0, 1.0, 4.5, 9.0, 99.0, 99.0, 99.0, 99.0])
-
-
-def g_function(x: np.ndarray) -> np.ndarray:
-    return np.prod((np.abs(4.0 * x - 2.0) + G_A) / (1.0 + G_A), axis=1)
-
-
-def borehole(x: np.ndarray) -> np.ndarray:
-    rw, r, tu, hu, tl, hl, length, kw = x.T
-    log_ratio = np.log(r / rw)
-    return 2.0 * np.pi * tu * (hu - hl) / (log_ratio * (1.0 + 2.0 * length * tu / (log_ratio * rw**2 * kw) + tu / tl))
-
-
-PROBLEMS = {
-    "ishigami": (ishigami, np.full(3, -np.pi), np.full(3, np.pi)),
-    "g_function": (g_function, np.zeros(8), np.ones(8)),
-    "borehole": (borehole, np.array([0.05, 100.0, 63070.0, 990.0, 63.1, 700.0, 1120.0, 9855.0]),
-                 np.array([0.15, 50000.0, 115600.0, 1110.0, 116.0, 820.0, 1680.0, 12045.0])),
-}
 
 
 def spflow_defaults() -> dict:
