@@ -206,7 +206,7 @@ def outcome(g, base: BaseModel, truth: dict, variables: tuple[str, ...]) -> dict
         "heldout_rmse_ratio": math.sqrt(s["fit"]["chi2_heldout_final"] / s["fit"]["chi2_heldout_base"]),
         "coverage_heldout": [s["coverage"]["heldout_base"], s["coverage"]["heldout_final"]],
         "parameter_bias": [bias["base"], bias["final"]],
-        "chi2_pvalue": s["fit"]["chi2_pvalue"],
+        "chi2_pvalue": s["fit"]["chi2_pvalue"], "targeted_pvalue": s["fit"].get("targeted_pvalue"),
         "numerical_scale": ((s["numerical_error"] or {}).get("scale") or {}).get("estimate"),
         "numerical_scale_interval": [((s["numerical_error"] or {}).get("scale") or {}).get(k)
                                      for k in ("lower", "upper")],

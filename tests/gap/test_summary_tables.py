@@ -19,7 +19,7 @@ RESULT = {
          "fitted_strength": 0.2, "delta_elpd": None, "delta_elpd_se": 1.0, "gap_closed": 0.1, "passes": False},
         {"name": "dispersion", "screen_z": 0.5, "snr": 0.1, "absorbed": 0.9, "shortlisted": False}],
     "fit": {"chi2_base": 250.0, "chi2_final": 95.0, "dof": 100.0, "chi2_heldout_base": 80.0,
-            "chi2_heldout_final": None},
+            "chi2_heldout_final": None, "chi2_pvalue": 1.5e-9, "targeted_pvalue": 0.004},
     "gap_closed": {"calibration": 0.6, "heldout": 0.4}, "forward_runs": 42, "gap_cells": [],
     "numerical_error": {"variants": ["40 cells, tvd", "40 cells, upwind"],
                         "scale": {"estimate": 0.5, "lower": 0.25, "upper": 0.75, "level": 0.95, "maximum": 1.0}},
@@ -32,7 +32,10 @@ def _tables(result):
 
 def test_tables_hold_the_summary_numbers_with_their_units():
     tables = _tables(RESULT)
-    assert set(tables) == {"Verdict", "Candidate scores", "Gap closed", "Numerical error in the error model"}
+    assert set(tables) == {"Verdict", "Calibration gap", "Candidate scores", "Gap closed",
+                           "Numerical error in the error model"}
+    assert tables["Calibration gap"].rows == [[1.5e-9, 0.004, 250.0, 100.0]]
+    assert tables["Calibration gap"].units == ["1"] * 4
     assert tables["Verdict"].rows == [["ambiguous", "capillary_pressure, dispersion", "capillary_pressure",
                                        "capillary_pressure"]]
     scores = tables["Candidate scores"]
@@ -66,7 +69,7 @@ def test_without_a_numerical_scale_and_an_unattributed_gap():
 def test_the_report_renders_them_as_html_tables_with_units(tmp_path):
     items = summary_items(RESULT, 12.4)
     page = write_html_report(tmp_path / "report.html", "t", [Section("Gap diagnosis", items)], []).read_text()
-    assert page.count("<table>") == 4 + 2  # the four tables, the (empty) provenance and the software versions
+    assert page.count("<table>") == 5 + 2  # the five tables, the (empty) provenance and the software versions
     assert "<th>delta ELPD <span class='unit'>[1]</span></th>" in page
     assert "<td class='num'>12.25</td>" in page and "<pre>" not in page.split("Gap diagnosis")[1].split("Software")[0]
     text = text_lines(items)

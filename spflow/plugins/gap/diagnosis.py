@@ -56,7 +56,7 @@ from .psis_loo import compare_loo, psis_loo
 from .quantification import gap_closed, parameter_covariance, predictive_std, raw_jacobian
 from .signatures import predictive_pvalues, signatures
 from .subsets import SearchResult, SubsetFit, best_subset, subset_key
-from .verdict import CandidateScore, Rule, ambiguity_set, verdict
+from .verdict import CandidateScore, Rule, ambiguity_set, targeted_pvalue, verdict
 
 __all__ = ["Options", "GapDiagnosis", "ModelView", "Step", "diagnose"]
 
@@ -167,6 +167,8 @@ class GapDiagnosis:
     tried: dict[str, float] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     cost: dict[str, Cost] = field(default_factory=dict)
+    #: the targeted test of the calibration gap (verdict.targeted_pvalue; NaN before any refit)
+    targeted_pvalue: float = float("nan")
 
     @property
     def dof(self) -> int:
@@ -353,6 +355,8 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     remaining = list(candidates)
     steps: list[Step] = []
     accepted: list[list[str]] = []
+    # the calibration gap: the omnibus test now, the targeted test once the first refits are in (verdict.py)
+    significant, targeted = pvalue < options.alpha, float("nan")
     while remaining and len(fitting.candidates) < options.max_effects:
         ledger.enter("screening")
         cols = fingerprint_columns(predictor, layout_fit, fitting, remaining)
@@ -377,8 +381,14 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             step.loo[c.name] = (*compare_loo(loo, loo_ref), float(k.max()) if k.size else float("nan"))
             step.scores[c.name] = score(c, f, w, w_ref, fitting.chi2, physical)
         steps.append(step)
+        if len(steps) == 1:
+            targeted = targeted_pvalue([x.chi2_drop for x in step.scores.values()], len(candidates))
+            significant = significant or targeted < options.alpha
+            if significant and pvalue >= options.alpha:
+                say(f"calibration gap significant on the targeted test only (p = {targeted:.3g}; omnibus p = "
+                    f"{pvalue:.3g})")
         # nothing is accepted without a significant calibration gap (verdict.py: gains only out of sample)
-        chosen_set = ambiguity_set(list(step.scores.values()), options.rule) if pvalue < options.alpha else []
+        chosen_set = ambiguity_set(list(step.scores.values()), options.rule) if significant else []
         if chosen_set:
             accepted += ([[provisional]] if provisional else []) + [[s.name for s in chosen_set]]
             best = chosen_set[0].name
@@ -388,13 +398,13 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             if chi2.sf(reference.chi2, dof - len(reference.candidates)) >= options.alpha:
                 break  # no significant calibration gap left
             continue
-        closers = [x for x in step.scores.values() if x.physical and x.gap_closed > 0.0]
-        if provisional is not None or fitting is not base_fit or pvalue >= options.alpha or not closers:
+        closers = [x for x in step.scores.values() if x.physical and x.chi2_drop > 0.0]
+        if provisional is not None or fitting is not base_fit or not significant or not closers:
             break  # (refits without a calibration gap are reported, not used)
         # no single effect passes out of sample although the calibration gap is significant: two mechanisms may
         # compensate each other, so add a second effect to the one closing most of the calibration gap and score
         # the pair against the reference (the provisional effect is accepted only together with its partner)
-        provisional = max(closers, key=lambda x: x.gap_closed).name
+        provisional = max(closers, key=lambda x: x.chi2_drop).name
         fitting = step.fits[provisional]
         remaining = [c for c in remaining if c.name != provisional]
     accepted = [[n for n in names if n == names[0] or all(n not in later for later in accepted[k + 1:])]
@@ -404,8 +414,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     # significant calibration gap (subsets.py; the failure mode of compensating effects -- with two or more effects
     # found greedily the search is skipped: its joint refits would cost several times the whole diagnosis)
     search, pool, search_runs = None, [], 0
-    gap_left = chi2.sf(reference.chi2, dof - len(reference.candidates)) < options.alpha
-    if pvalue < options.alpha and gap_left and len(accepted) < 2 and options.max_effects >= 2 and steps:
+    gap_left = significant if reference is base_fit else \
+        chi2.sf(reference.chi2, dof - len(reference.candidates)) < options.alpha
+    if significant and gap_left and len(accepted) < 2 and options.max_effects >= 2 and steps:
         first = steps[0]
         ranked = sorted(first.scores, key=lambda n: -first.scores[n].delta_elpd)
         z = dict(zip(first.screen.names, first.screen.best_z()))
@@ -452,9 +463,14 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             w_ref = outs[search.chosen]
 
     final_closed = gap_closed(base_fit.chi2, reference.chi2, dof)
+    def closes(s: CandidateScore) -> bool:  # (a gap only the targeted test finds has no fraction to close)
+        if np.isfinite(s.gap_closed):
+            return s.gap_closed >= options.rule.closed_fraction
+        return targeted_pvalue([s.chi2_drop], len(candidates)) < options.alpha
+
     closers = [] if accepted else [s.name for s in sorted(steps[0].scores.values(), key=lambda s: -s.delta_elpd)
-                                   if s.physical and s.gap_closed >= options.rule.closed_fraction]
-    decided, ambiguity = verdict(accepted, pvalue < options.alpha, final_closed, closers, options.rule)
+                                   if s.physical and closes(s)]
+    decided, ambiguity = verdict(accepted, significant, final_closed, closers, options.rule)
     declared = decided in ("effect", "ambiguous")
     if not declared:
         reference, w_ref = base_fit, w_base  # nothing declared: the final model is the base
@@ -471,8 +487,8 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                                                                 rng)
     runs = predictor.runs + (numerical.runs if numerical is not None else 0)
     return GapDiagnosis(options, base, cal, held, candidates, layout_fit, layout_score, layout_all, kind, base_fit,
-                        pvalue, pvalue < options.alpha, steps, accepted, decided, ambiguity, reference,
+                        pvalue, significant, steps, accepted, decided, ambiguity, reference,
                         _label(reference), w_base, w_ref, base_view, final_view,
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
                         time.perf_counter() - start, runs, chi2_measurement, numerical, scale, disc, w_disc, search,
-                        pool, search_runs, tried, notes, ledger.table())
+                        pool, search_runs, tried, notes, ledger.table(), targeted)

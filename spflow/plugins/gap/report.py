@@ -270,7 +270,7 @@ def _scalars(g: GapDiagnosis):
     cal = [e.name for e in g.calibration]
     held = [e.name for e in g.heldout]
     out = {"chi2_base": g.base_fit.chi2, "chi2_final": g.final_fit.chi2, "dof": float(g.dof),
-           "chi2_pvalue": g.chi2_pvalue,
+           "chi2_pvalue": g.chi2_pvalue, "targeted_pvalue": g.targeted_pvalue,
            "gap_closed_calibration": gap_closed(g.base_fit.chi2, g.final_fit.chi2, g.dof),
            "elpd_base": g.out_of_sample_base.total, "elpd_final": g.out_of_sample_final.total}
     n_score = float(np.sum(np.isfinite(g.out_of_sample_base.whitened)))
@@ -399,7 +399,8 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
               "significant_final": bool(r["xcorr_significant"][1, i])} for i in flagged[:top_cells]]
     rmse_ratio = {f"{v}:{e}": _f(r["rmse"][1, k] / r["rmse"][0, k]) if r["rmse"][0, k] > 0 else None
                   for k, (v, e) in enumerate(zip(r["block_variable"].values, r["block_experiment"].values))}
-    scalar = {k: _f(r[k]) for k in ("chi2_base", "chi2_final", "dof", "chi2_pvalue", "gap_closed_calibration",
+    scalar = {k: _f(r[k]) for k in ("chi2_base", "chi2_final", "dof", "chi2_pvalue", "targeted_pvalue",
+                                    "gap_closed_calibration",
                                     "gap_closed_heldout", "chi2_heldout_base", "chi2_heldout_final", "elpd_base",
                                     "elpd_final", "coverage_calibration_base", "coverage_calibration_final",
                                     "coverage_heldout_base", "coverage_heldout_final")}

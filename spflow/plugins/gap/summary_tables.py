@@ -24,6 +24,12 @@ def _verdict(result: dict) -> list[str | Table]:
         [[result["verdict"], ", ".join(result["ambiguity_set"]) or "-",
           ", ".join(e["name"] for e in result["effects"]) or "-", result["final_model"] or "-"]],
         title="Verdict")]
+    fit = result["fit"]
+    items.append(Table(["omnibus p", "targeted p", "base chi2", "dof"],
+                       [[_or_dash(fit["chi2_pvalue"]), _or_dash(fit.get("targeted_pvalue")), _or_dash(fit["chi2_base"]),
+                         _or_dash(fit["dof"])]], units=["1", "1", "1", "1"],
+                       title="Calibration gap: significant when either test's p is below the diagnosis's alpha "
+                             "(targeted: the largest candidate misfit drop, Bonferroni over the catalogue)"))
     if result["verdict"] in ("unattributed", "out_of_catalogue"):
         where = ", ".join(f"{c['variable']}:{c['experiment']}:{c['slug']}" for c in result["gap_cells"][:5])
         items.append(f"the gap is real (chi2 {result['fit']['chi2_base']} on {result['fit']['dof']:g} dof) but not "
