@@ -102,3 +102,15 @@ def test_selected_twins_keep_their_place_and_seed_in_the_study():
     assert gv.select(specs, None) == [(s, i) for i, s in enumerate(specs)]
     with pytest.raises(SystemExit, match="single:gravity#1"):
         gv.select(specs, ["single:gravity#1"])
+
+
+def test_rates_beyond_numerics_count_only_twins_that_record_it():
+    strong = dict(record("single:dispersion", 12.0, "effect", [["dispersion"]], ["dispersion"], {"dispersion": 3.0}),
+                  snr_beyond_numerics=4.0)
+    within = dict(record("single:dispersion", 12.0, "none", truth={"dispersion": 1.0}), snr_beyond_numerics=1.5)
+    unknown = record("single:dispersion", 12.0, "none", truth={"dispersion": 2.0})
+    m = gv.metrics([record("null", 0.0, "none"), strong, within, unknown])
+    assert m["detection_beyond_numerics_snr3"]["value"] == 1.0 and m["detection_beyond_numerics_snr3"]["n"] == 1
+    assert m["detection_snr3"]["value"] == pytest.approx(1 / 3)
+    bins = {tuple(b["snr"]): b["n"] for b in gv.power([strong, within, unknown], "snr_beyond_numerics")}
+    assert bins[(1.0, 3.0)] == 1 and bins[(3.0, 10.0)] == 1 and sum(bins.values()) == 2
