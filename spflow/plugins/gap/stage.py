@@ -61,6 +61,8 @@ OPTION_PARAMS = {
                      doc="grid step (a multiple of the transducer interval keeps the AR(1) model exact)"),
     "alpha": Param(float, 0.01, bounds=(1e-6, 0.5), doc="significance level of the calibration-gap test and cells"),
     "shortlist": Param(int, 3, bounds=(1, 20), doc="candidates refitted per step (plus ambiguity partners)"),
+    "expand_shortlist": Param(bool, True, doc="first step: while the gap is significant and no refit passes, refit "
+                                              "the next candidates in screen order (shortlist at a time)"),
     "max_effects": Param(int, 2, bounds=(1, 5),
                          doc="effects in the final model at most (greedy and joint search; 3 finds three "
                              "coexisting effects)"),
