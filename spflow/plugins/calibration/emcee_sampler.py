@@ -16,8 +16,9 @@ default, a = 2). On the 9-parameter chapter-4 posterior of
 a clean twin the stretch move needed about 3x more evaluations per effective sample (τ ≈ 40 vs 15 kept draws per
 walker at 18 walkers) and left R-hat near 1.1 within the thesis budget; see ``docs/calibration.md``.
 
-Start: ``prior`` draws walkers uniformly in the box; ``best`` takes the ``walkers`` most probable of ``init_draws``
-uniform draws (cheap on a surrogate).
+Start: ``prior`` draws walkers from the prior (uniform in the box, or the space's marginals: :mod:`.parameter_prior`),
+so every walker starts inside the support; ``best`` takes the ``walkers`` most probable of ``init_draws`` prior draws
+(cheap on a surrogate).
 """
 
 from __future__ import annotations
@@ -40,9 +41,10 @@ _MOVES = {
 
 
 def initial_points(model: PosteriorModel, count: int, how: str, draws: int, rng: np.random.Generator) -> np.ndarray:
-    """``count`` starting points (count, ndim): uniform in the prior box (``prior``) or the most probable ``count``
-    of ``draws`` uniform points (``best``); sampled log σ_i start at their profile values with a small jitter."""
-    pool = rng.uniform(model.lower, model.upper, size=(max(count, draws) if how == "best" else count, model.n_theta))
+    """``count`` starting points (count, ndim): prior draws (``prior``; uniform in the box for a uniform prior) or the
+    most probable ``count`` of ``draws`` prior draws (``best``); sampled log σ_i start at their profile values with a
+    small jitter."""
+    pool = model.prior.sample((max(count, draws) if how == "best" else count,), rng)
     if how == "best":
         log_post = np.concatenate([model.evaluate(chunk)[0] for chunk in np.array_split(pool, -(-len(pool) // 4096))])
         pool = pool[np.argsort(-log_post)[:count]]
@@ -54,12 +56,12 @@ def initial_points(model: PosteriorModel, count: int, how: str, draws: int, rng:
 
 class EmceeSampler(SamplerStage):
     name = "emcee_sampler"
-    version = "3"
+    version = "4"  # 4: the prior is the space's marginals (uniform: the box, unchanged draws; issue #24)
     description = "emcee ensemble MCMC on a surrogate posterior (thesis §4.6, Eqs. 4.1-4.5)"
     params = SamplerStage.common_params | {
         "walkers": Param(int, 0, bounds=(0, 4096), doc="walkers per run, >= 2 x sampled dimensions (0: exactly that)"),
         "moves": Param(str, "de_snooker", choices=sorted(_MOVES), doc="emcee moves"),
-        "init": Param(str, "prior", choices=["prior", "best"], doc="walker start: uniform in box or best prior draws"),
+        "init": Param(str, "prior", choices=["prior", "best"], doc="walker start: prior draws or the best of them"),
         "init_draws": Param(int, 4096, bounds=(1, 10**7), doc="uniform draws screened by init='best'"),
     }
 

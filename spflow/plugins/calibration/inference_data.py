@@ -1,8 +1,8 @@
 """An MCMC posterior as ArviZ ``InferenceData`` (one netCDF file, one group per kind of draw), for ``az.loo``,
 ``az.summary``, ``az.plot_trace`` and any other ArviZ tool.
 
-:func:`to_inference_data` rebuilds the posterior model of thesis §4.6 (Eqs. 4.2-4.5: uniform prior box, Gaussian
-likelihood per QoI block, surrogate for the forward model) from the sampler's Dataset, the surrogate and the
+:func:`to_inference_data` rebuilds the posterior model of thesis §4.6 (Eqs. 4.2-4.5: the prior of the parameters, uniform on
+the box or the marginals the posterior records (:mod:`.parameter_prior`), Gaussian likelihood per QoI block, surrogate for the forward model) from the sampler's Dataset, the surrogate and the
 observations it was trained on, and returns the groups
 
 * ``posterior``: one variable per calibrated parameter θ_j (chain, draw) in its design column's unit (log10 of the
@@ -18,8 +18,10 @@ observations it was trained on, and returns the groups
   in their unit;
 * ``posterior_predictive``: new observations of each block drawn at every posterior draw from Eq. 4.3 with the
   surrogate for the forward model (the simulator's predictive bands are the ``posterior_predictive`` stage's);
-* ``prior``: uniform draws of θ in the prior box (Eq. 4.2); the Jeffreys prior of σ_i is improper and not drawn;
-* ``constant_data``: each parameter's prior range (dim ``bound``) and the parameter map (which forward-model
+* ``prior``: draws of θ from its prior (uniform in the box, Eq. 4.2, or the recorded marginals); the Jeffreys prior of
+  σ_i is improper and not drawn;
+* ``constant_data``: each parameter's prior range (dim ``bound``), its prior law (``distribution`` /
+  ``distribution_parameters`` along ``param``, when the posterior records them) and the parameter map (which forward-model
   parameters each column sets, on which scale), so that :func:`read_posterior` gives the draws back as a sampler
   stage's Dataset (the OPM export reads the file through it).
 
@@ -46,6 +48,7 @@ from spflow.plugins.surrogates.contract import load_surrogate
 from .aligned_data import align
 from .diagnostics import arviz
 from .likelihood import PosteriorModel
+from .parameter_prior import ParameterPrior
 from .posterior import POSTERIOR
 
 __all__ = ["to_inference_data", "from_run", "write_inference_data", "read_posterior", "posterior_model"]
@@ -70,7 +73,8 @@ def posterior_model(posterior: xr.Dataset, surrogate: xr.Dataset, observations: 
     model = PosteriorModel(sur, align(sur.outputs, observations, pairs), pairs,
                            posterior["lower"].values.astype(float), posterior["upper"].values.astype(float),
                            noise=noise, sigma=sigma,
-                           surrogate_variance=bool(int(posterior.attrs.get("surrogate_variance", 1))))
+                           surrogate_variance=bool(int(posterior.attrs.get("surrogate_variance", 1))),
+                           prior=ParameterPrior.of_posterior(posterior, "to_inference_data: the posterior"))
     if "block_points" in posterior and list(model.points()) != [int(n) for n in posterior["block_points"].values]:
         raise ParameterError(f"to_inference_data: the observations give {model.points()} points per block "
                              f"{[f'{v}/{e}' for v, e in pairs]}, the posterior was drawn with "
@@ -100,7 +104,7 @@ def _stamp(ds: xr.Dataset, title: str) -> xr.Dataset:
 def to_inference_data(posterior: xr.Dataset, surrogate: xr.Dataset, observations: xr.Dataset, *,
                       prior_draws: int = 1000, seed: int = 0, thin: int = 1):
     """The ``az.InferenceData`` of a sampler stage's ``posterior`` (module docstring); ``surrogate`` and
-    ``observations`` are the Datasets the sampler was given; ``prior_draws`` uniform prior draws of θ and the
+    ``observations`` are the Datasets the sampler was given; ``prior_draws`` prior draws of θ and the
     predictive noise come from ``seed``; ``thin``: keep every ``thin``-th draw of each chain (recorded as the
     groups' attribute ``thinned_by``)."""
     for name, value in (("prior_draws", prior_draws), ("thin", thin)):
@@ -171,18 +175,18 @@ def to_inference_data(posterior: xr.Dataset, surrogate: xr.Dataset, observations
          "chain_acceptance": ("chain", posterior["acceptance"].values,
                               {"units": "1", "long_name": "acceptance fraction of the chain"})},
         coords=coords)
-    prior_theta = rng.uniform(model.lower, model.upper, size=(1, prior_draws, len(names)))
+    prior_theta = model.prior.sample((1, prior_draws), rng)
     prior = xr.Dataset(
-        {name: (("chain", "draw"), prior_theta[..., k], {"units": unit, "long_name": f"{what[scale]}{name}, "
-                                                                                     "uniform prior (Eq. 4.2)"})
-         for k, (name, unit, scale) in enumerate(zip(names, units, scales))},
+        {name: (("chain", "draw"), prior_theta[..., k], {"units": unit, "long_name": f"{what[scale]}{name}, prior "
+                                                                                     f"{law!r} (Eq. 4.2)"})
+         for k, (name, unit, scale, law) in enumerate(zip(names, units, scales, model.prior.inputs))},
         coords={"chain": [0], "draw": np.arange(prior_draws)})
     constant = xr.Dataset(
         {name: ("bound", posterior[["lower", "upper"]].sel(param=name).to_array().values.astype(float),
                 {"units": unit, "long_name": f"prior range of {what[scale]}{name} (Eq. 4.2)"})
          for name, unit, scale in zip(names, units, scales)}
         | {var: ("param", posterior[var].values.astype(str), dict(posterior[var].attrs))
-           for var in (NAMES_VAR, SCALE_VAR) if var in posterior},
+           for var in (NAMES_VAR, SCALE_VAR, "distribution", "distribution_parameters") if var in posterior},
         coords={"bound": ("bound", ["lower", "upper"], {"long_name": "end of the range"}),
                 "param": ("param", names, {"long_name": "calibrated parameter (design column)"})})
     sampler = {k: posterior.attrs[k] for k in ("sampler", "noise", "surrogate") if k in posterior.attrs}

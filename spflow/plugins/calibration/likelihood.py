@@ -1,5 +1,6 @@
-"""The posterior of thesis §4.6: uniform prior on the box (Eq. 4.2) times a Gaussian likelihood per QoI block (Eq. 4.3)
-with the forward model replaced by a surrogate (Eq. 4.5).
+"""The posterior of thesis §4.6: the prior of the parameters (uniform on the box, Eq. 4.2, or the space's marginals:
+:mod:`.parameter_prior`) times a Gaussian likelihood per QoI block (Eq. 4.3) with the forward model replaced by a
+surrogate (Eq. 4.5).
 
 A block is one (variable, experiment) pair — e.g. pressure drop of BCF1 on the 0.1 PV grid — with its own noise
 level σ_i. Three treatments of σ_i (``noise``):
@@ -30,6 +31,7 @@ from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.contract import Surrogate
 
 from .aligned_data import AlignedData
+from .parameter_prior import ParameterPrior
 
 __all__ = ["NOISE_MODES", "PosteriorModel"]
 
@@ -42,7 +44,8 @@ class PosteriorModel:
     """log posterior of θ (and of log σ_i when sampled) given a surrogate and aligned observations.
 
     ``lower``/``upper`` is the prior box in the surrogate's parameter order; ``pairs`` the blocks; ``sigma`` the known
-    noise levels (``noise="known"`` only, one per block, in the block's units).
+    noise levels (``noise="known"`` only, one per block, in the block's units); ``prior`` the parameters' marginals
+    (:class:`.ParameterPrior`, in the surrogate's order, supports = the box; None: uniform on the box, Eq. 4.2).
     """
 
     surrogate: Surrogate
@@ -53,6 +56,7 @@ class PosteriorModel:
     noise: str = "jeffreys_marginal"
     sigma: tuple[float, ...] = ()
     surrogate_variance: bool = True
+    prior: ParameterPrior | None = None
 
     def __post_init__(self):
         if self.noise not in NOISE_MODES:
@@ -75,7 +79,11 @@ class PosteriorModel:
         # each block's prediction columns once: a slice (a view, no copy per call) where they are consecutive
         self._take = [slice(int(c[0]), int(c[-1]) + 1) if np.array_equal(c, np.arange(c[0], c[-1] + 1)) else c
                       for c in self.columns]
-        self.log_prior_density = -float(np.sum(np.log(self.upper - self.lower)))
+        if self.prior is None:
+            self.prior = ParameterPrior.box(self.surrogate.names, self.lower, self.upper)
+        elif not (np.array_equal(self.prior.lower, self.lower) and np.array_equal(self.prior.upper, self.upper)):
+            raise ParameterError(f"prior: the supports of the marginals {self.prior.describe()!r} must be the box "
+                                 f"lower = {self.lower.tolist()}, upper = {self.upper.tolist()}")
 
     @property
     def n_theta(self) -> int:
@@ -101,7 +109,8 @@ class PosteriorModel:
             yield obs - mean[:, take], None if var is None else np.ascontiguousarray(var[:, take])
 
     def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(log posterior, log likelihood), each (rows,), at coordinates ``x`` (rows, ndim); −inf outside the box."""
+        """(log posterior, log likelihood), each (rows,), at coordinates ``x`` (rows, ndim); −inf outside the box (the
+        supports of the prior's marginals)."""
         from . import jeffreys  # numba kernels: compiled when a posterior is evaluated, not when spflow lists stages
 
         x = np.atleast_2d(np.asarray(x, dtype=float))
@@ -111,9 +120,10 @@ class PosteriorModel:
         ok = np.flatnonzero(self.inside(theta))
         if not ok.size:
             return log_post, log_lik
+        inner = theta if ok.size == x.shape[0] else theta[ok]
         lik = np.zeros(ok.size)
-        prior = np.full(ok.size, self.log_prior_density)
-        for i, (r, v) in enumerate(self._blocks(theta if ok.size == x.shape[0] else theta[ok])):
+        prior = self.prior.log_density(inner)
+        for i, (r, v) in enumerate(self._blocks(inner)):
             if self.noise == "jeffreys_marginal":
                 lik += jeffreys.log_marginal_checked(r, v)
                 continue

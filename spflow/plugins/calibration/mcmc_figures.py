@@ -3,7 +3,8 @@
 * :func:`trace_figure` — traces of every parameter (App. B), one line per independent chain (for emcee: the first
   walker of each run);
 * :func:`autocorrelation_figure` — autocorrelation of the kept draws against lag (App. C, Eq. C.1);
-* :func:`prior_posterior_figure` — posterior histogram over the uniform prior density (App. D), optional truth;
+* :func:`prior_posterior_figure` — posterior histogram over the prior density (App. D; uniform on the box, or the
+  marginal the posterior records for the parameter), optional truth;
 * :func:`geweke_figure` — Geweke z of sub-chains starting further and further in (App. E), ±2 bands, one colour per
   independent chain (for emcee: each run's walker mean);
 * :func:`predictive_figure` — posterior predictive bands with the observations (Fig. 4.4 for the training coreflood,
@@ -20,6 +21,7 @@ import xarray as xr
 from spflow.core.figure import subplots
 
 from .diagnostics import autocorrelation, geweke_intervals, independent_series
+from .parameter_prior import ParameterPrior
 
 __all__ = ["trace_figure", "autocorrelation_figure", "prior_posterior_figure", "geweke_figure", "predictive_figure"]
 
@@ -85,19 +87,22 @@ def autocorrelation_figure(posterior: xr.Dataset, path: Path, max_lag: int = 60)
 
 def prior_posterior_figure(posterior: xr.Dataset, path: Path, truth: dict[str, float] | None = None) -> Path:
     names = [str(n) for n in posterior["param"].values]
+    prior = ParameterPrior.of_posterior(posterior, "prior_posterior_figure: the posterior")
     fig, axes = _grid(len(names))
-    for ax, name in zip(axes, names):
+    for ax, name, law in zip(axes, names, prior.inputs):
         lo, hi = float(posterior["lower"].sel(param=name)), float(posterior["upper"].sel(param=name))
         ax.hist(posterior["theta"].sel(param=name).values.ravel(), bins=50, range=(lo, hi), density=True,
                 alpha=0.6, label="posterior")
-        ax.hlines(1.0 / (hi - lo), lo, hi, color="k", ls="--", label="prior")
+        grid = np.linspace(lo, hi, 201)
+        ax.plot(grid, np.exp(law.logpdf(grid)), color="k", ls="--", label="prior")
         if truth and name in truth:
             ax.axvline(truth[name], color="r", lw=1.2, label="truth")
         ax.set_xlim(lo, hi)
         ax.set_title(_label(posterior, name), fontsize=9)
         ax.set_yticks([])
     axes[0].legend(fontsize=7)
-    return _save(fig, path, "Prior (uniform on the box) and posterior")
+    title = "uniform on the box" if prior.uniform else "marginals of the space"
+    return _save(fig, path, f"Prior ({title}) and posterior")
 
 
 def geweke_figure(posterior: xr.Dataset, path: Path) -> Path:

@@ -2,14 +2,19 @@
 and the assembly of the posterior Dataset. A subclass implements only ``_sample_runs`` (the independent chains).
 
 Inputs: a fitted surrogate (any kind, :func:`~spflow.plugins.surrogates.contract.load_surrogate`), the observed data
-on the simulator grid (``observations`` stage) and the parameter space whose box is the uniform prior (Eq. 4.2; it
-must lie inside the surrogate's training box). The budget follows the thesis (§4.6): ``samples`` = 10^5 posterior
+on the simulator grid (``observations`` stage) and the parameter space that gives the prior: uniform on its box
+(Eq. 4.2), or the marginals it records (``priors`` stage with ``distribution="truncated_normal"``;
+:mod:`.parameter_prior`). The box must lie inside the surrogate's training box. The prior of every parameter is
+printed (``verbose``) and recorded in the output: attrs ``prior`` (one ``name ~ law`` line per parameter) and
+``prior_note`` (what was assumed), and the variables ``distribution`` / ``distribution_parameters`` along ``param``. The budget follows the thesis (§4.6): ``samples`` = 10^5 posterior
 evaluations per chain, the first ``burn`` = 20 000 discarded, every ``thin`` = 5th kept — 16 000 draws per chain.
 Independent chains are seeded from ``seed`` by ``numpy.random.SeedSequence.spawn``, so a run is reproducible whatever
 the worker count.
 """
 
 from __future__ import annotations
+
+import sys
 
 import numpy as np
 import xarray as xr
@@ -23,6 +28,7 @@ from spflow.plugins.surrogates.contract import SURROGATE, Surrogate, load_surrog
 
 from .aligned_data import align
 from .likelihood import NOISE_MODES, PosteriorModel
+from .parameter_prior import ParameterPrior
 from .posterior import POSTERIOR, posterior_dataset
 
 __all__ = ["SamplerStage", "ChainResult"]
@@ -77,8 +83,8 @@ class SamplerStage(Stage):
         return [(v, e) for e in self.params["experiments"] for v in self.params["variables"]]
 
     def model(self, surrogate: Surrogate, observations: xr.Dataset, space: xr.Dataset) -> PosteriorModel:
-        """The posterior model in the surrogate's parameter order; raises before any work if the prior box is not
-        inside the surrogate's box or a block has no data."""
+        """The posterior model in the surrogate's parameter order, with the space's prior (:mod:`.parameter_prior`);
+        raises before any work if the prior box is not inside the surrogate's box or a block has no data."""
         names = [str(n) for n in space["param"].values]
         if sorted(names) != sorted(surrogate.names):
             raise ParameterError(f"stage {self.name!r}: space parameters {names} differ from the surrogate's "
@@ -94,9 +100,11 @@ class SamplerStage(Stage):
             raise ParameterError(f"stage {self.name!r}: prior range of {n} [{lower[k]:g}, {upper[k]:g}] must lie "
                                  f"inside the surrogate's training range [{surrogate.lower[k]:g}, "
                                  f"{surrogate.upper[k]:g}]")
+        prior = ParameterPrior.of_space(box, f"stage {self.name!r}")
         aligned = align(surrogate.outputs, observations, self.pairs())
         return PosteriorModel(surrogate, aligned, self.pairs(), lower, upper, noise=self.params["noise"],
-                              sigma=tuple(self.params["sigma"]), surrogate_variance=self.params["surrogate_variance"])
+                              sigma=tuple(self.params["sigma"]), surrogate_variance=self.params["surrogate_variance"],
+                              prior=prior)
 
     def _check_model(self, model: PosteriorModel) -> None:
         """Subclass hook: raise ParameterError when the sampler cannot handle the model (before any sampling)."""
@@ -116,6 +124,10 @@ class SamplerStage(Stage):
         sur = load_surrogate(surrogate)
         model = self.model(sur, observations, space)
         self._check_model(model)
+        if ctx.verbose:
+            note = f" ({model.prior.note})" if model.prior.note else ""
+            print(f"[{ctx.node}] prior{note}:\n  " + model.prior.describe().replace("\n", "\n  "), file=sys.stderr,
+                  flush=True)
         *seeds, noise_seed = np.random.SeedSequence(self.params["seed"]).spawn(self.params["chains"] + 1)
         results = self._sample_runs(ctx, model, seeds)
         x = np.concatenate([r["x"] for r in results])  # (chain, draw, ndim): walkers of every run
@@ -127,9 +139,10 @@ class SamplerStage(Stage):
         attrs = {"sampler": self.name, "noise": self.params["noise"], "surrogate": str(surrogate.attrs["surrogate"]),
                  "surrogate_variance": int(self.params["surrogate_variance"]), "samples": self.params["samples"],
                  "burn": self.params["burn"], "thin": self.params["thin"], "independent_chains": self.params["chains"],
-                 "seed": self.params["seed"], **self._attrs(results)}
+                 "seed": self.params["seed"], "prior": model.prior.describe(), "prior_note": model.prior.note,
+                 **self._attrs(results)}
         return posterior_dataset(
             x[..., : model.n_theta], sigma, np.concatenate([r["log_likelihood"] for r in results]),
             np.concatenate([r["log_posterior"] for r in results]), np.concatenate([r["acceptance"] for r in results]),
             space=space, pairs=model.pairs, points=model.points(), units=units, attrs=attrs,
-            chain_coords=self._chain_coords(results))
+            chain_coords=self._chain_coords(results), prior=model.prior.variables())

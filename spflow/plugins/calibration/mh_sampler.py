@@ -56,13 +56,13 @@ class GaussianProposal:
 
 class MHSampler(SamplerStage):
     name = "mh_sampler"
-    version = "3"
+    version = "4"  # 4: the prior is the space's marginals (uniform: the box, unchanged draws; issue #24)
     description = "adaptive random-walk Metropolis-Hastings on a surrogate posterior (thesis §4.6, PyMC-like)"
     params = SamplerStage.common_params | {
         "tune_interval": Param(int, 500, bounds=(10, 10**7), doc="burn-in steps between proposal updates"),
         "initial_scale": Param(float, 0.02, bounds=(1e-8, 1.0), doc="first step size as a fraction of the box width"),
         "adapt_covariance": Param(bool, True, doc="proposal shape from the chain's covariance during burn-in"),
-        "init": Param(str, "prior", choices=["prior", "best"], doc="chain start: uniform in box or best prior draw"),
+        "init": Param(str, "prior", choices=["prior", "best"], doc="chain start: a prior draw or the best of them"),
         "init_draws": Param(int, 4096, bounds=(1, 10**7), doc="uniform draws screened by init='best'"),
     }
 

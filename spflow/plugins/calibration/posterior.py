@@ -3,7 +3,10 @@
 ArviZ-compatible layout (``az.convert_to_dataset`` / ``az.rhat`` read it as is): draws of the model parameters θ as
 ``theta`` (chain, draw, param), of the per-QoI noise σ_i of Eq. 4.3 as ``sigma`` (chain, draw, block), the log
 likelihood and log posterior per draw, and sampler statistics (``acceptance`` per chain). The prior box (Eq. 4.2)
-travels along as ``lower``/``upper`` so that prior-vs-posterior plots and the predictive stage need nothing else.
+travels along as ``lower``/``upper`` and each parameter's prior law as ``distribution`` / ``distribution_parameters``
+(:func:`~spflow.plugins.surrogates.input_marginals.marginal_variables`; absent in a posterior written before they were
+recorded, which then reads as uniform on the box), so that prior-vs-posterior plots and the predictive stage need
+nothing else.
 Each QoI block is labelled by its variable and experiment (``block_variable``, ``block_experiment``), its number of
 points and its unit. Units are UDUNITS strings; θ, σ and the box have units per element (``unit``, ``block_units``;
 :mod:`spflow.core.cf_metadata`), and every variable a ``long_name`` (:meth:`DatasetSchema.annotate`).
@@ -17,6 +20,7 @@ import xarray as xr
 from spflow.core.cf_metadata import udunits
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.plugins.design.parameter_map import ParameterMap
+from spflow.plugins.surrogates.input_marginals import DISTRIBUTION_LONG_NAME, PARAMETERS_LONG_NAME
 
 __all__ = ["POSTERIOR", "posterior_dataset", "flat_theta", "block_labels"]
 
@@ -32,8 +36,10 @@ POSTERIOR = DatasetSchema(
         "log_likelihood": Variable(("chain", "draw"), units="1", long_name="log likelihood (natural log)"),
         "log_posterior": Variable(("chain", "draw"), units="1", long_name="log posterior density (natural log)"),
         "acceptance": Variable(("chain",), units="1", long_name="acceptance fraction of the chain"),
-        "lower": Variable(("param",), units_variable="unit", long_name="lower end of the uniform prior (Eq. 4.2)"),
-        "upper": Variable(("param",), units_variable="unit", long_name="upper end of the uniform prior (Eq. 4.2)"),
+        "lower": Variable(("param",), units_variable="unit", long_name="lower end of the prior's support (Eq. 4.2)"),
+        "upper": Variable(("param",), units_variable="unit", long_name="upper end of the prior's support (Eq. 4.2)"),
+        "distribution": Variable(("param",), kind="U", required=False, long_name=DISTRIBUTION_LONG_NAME),
+        "distribution_parameters": Variable(("param",), kind="U", required=False, long_name=PARAMETERS_LONG_NAME),
         "unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each parameter's design column"),
         "block_variable": Variable(("block",), kind="U", long_name="QoI of the block"),
         "block_experiment": Variable(("block",), kind="U", long_name="coreflood of the block"),
@@ -57,10 +63,11 @@ def block_labels(pairs: list[tuple[str, str]]) -> list[str]:
 def posterior_dataset(theta: np.ndarray, sigma: np.ndarray, log_likelihood: np.ndarray, log_posterior: np.ndarray,
                       acceptance: np.ndarray, *, space: xr.Dataset, pairs: list[tuple[str, str]],
                       points: list[int], units: list[str], attrs: dict,
-                      chain_coords: dict | None = None) -> xr.Dataset:
+                      chain_coords: dict | None = None, prior: dict | None = None) -> xr.Dataset:
     """Assemble the posterior Dataset from arrays (chain, draw, ...) of one sampler run; it carries the space's
     parameter map (:mod:`spflow.plugins.design.parameter_map`), so draws become forward-model parameters downstream
-    (``posterior_predictive``, ``slug_design``)."""
+    (``posterior_predictive``, ``slug_design``), and ``prior``, the variables recording the prior's marginals
+    (:meth:`.ParameterPrior.variables`)."""
     names = [str(n) for n in space["param"].values]
     ds = xr.Dataset(
         {
@@ -76,6 +83,7 @@ def posterior_dataset(theta: np.ndarray, sigma: np.ndarray, log_likelihood: np.n
             "block_experiment": ("block", np.array([e for _, e in pairs])),
             "block_points": ("block", np.asarray(points, dtype=np.int64), {"units": "1"}),
             "block_units": ("block", np.array([udunits(u) for u in units])),
+            **(prior or {}),
         },
         coords={"chain": ("chain", np.arange(theta.shape[0]), {"units": "1"}),
                 "draw": ("draw", np.arange(theta.shape[1]), {"units": "1"}), "param": names,

@@ -5,7 +5,10 @@ the box) and ``morris_indices`` wraps :func:`SALib.analyze.morris.analyze` for a
 QoI and parameter mu (mean elementary effect), mu* (mean absolute effect, Campolongo et al. 2007), its bootstrap
 interval half-width and sigma (spread of the effects: non-linearity or interactions). An elementary effect is the
 QoI change over a step of Delta = levels / (2 (levels - 1)) of the parameter's range, divided by Delta, so mu, mu*
-and sigma carry the QoI's unit ("per full range"). Constant QoIs get zeros (:mod:`.salib_glue`).
+and sigma carry the QoI's unit ("per full range"). Under marginals (``inputs``) the trajectories are drawn on the
+unit hypercube and mapped through the marginals' quantile functions (:mod:`.salib_glue`), so a step is Delta of the
+parameter's probability scale (its cdf) and the effects are "per full range of the cdf" (Saltelli et al. 2008,
+Global Sensitivity Analysis: The Primer, §3.3, for non-uniform inputs). Constant QoIs get zeros (:mod:`.salib_glue`).
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ import xarray as xr
 from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 
-from .salib_glue import is_constant, salib_problem
+from .salib_glue import is_constant, salib_design, salib_problem
 
 __all__ = ["check_morris_design", "morris_sample", "morris_indices"]
 
@@ -33,12 +36,14 @@ def check_morris_design(trajectories: int, levels: int, where: str = "Morris:") 
 
 
 def morris_sample(names: list[str], lower: np.ndarray, upper: np.ndarray, trajectories: int, *, levels: int = 4,
-                  seed: int | np.random.Generator | None = None) -> np.ndarray:
-    """The (trajectories (d + 1), d) Morris design on the box (physical units), in SALib's row order."""
+                  seed: int | np.random.Generator | None = None, inputs=None) -> np.ndarray:
+    """The (trajectories (d + 1), d) Morris design on the box (physical units), in SALib's row order; with ``inputs``
+    (one marginal per name) the grid is one of the marginals' quantiles (module docstring)."""
     from SALib.sample import morris as morris_sampler  # SALib loads when a design is drawn
 
     check_morris_design(trajectories, levels)
-    return morris_sampler.sample(salib_problem(names, lower, upper), trajectories, num_levels=levels, seed=seed)
+    return salib_design(lambda problem: morris_sampler.sample(problem, trajectories, num_levels=levels, seed=seed),
+                        names, lower, upper, inputs)
 
 
 def morris_indices(x: np.ndarray, y: np.ndarray, names: list[str], lower: np.ndarray, upper: np.ndarray, *,
@@ -47,7 +52,9 @@ def morris_indices(x: np.ndarray, y: np.ndarray, names: list[str], lower: np.nda
     """mu, mu_star, mu_star_conf, sigma (``qoi``, ``param``) and the QoI ``variance`` (``qoi``) from a
     :func:`morris_sample` design ``x`` and its evaluations ``y`` (n_runs, n_qoi).
 
-    The elementary effects are SALib's unscaled ones, output differences over the step on the unit-scaled box, so
+    The elementary effects are SALib's unscaled ones, output differences over the step on the unit-scaled box (on
+    the marginals' cdf scale for a design drawn under marginals: SALib reads only the direction of each step from
+    ``x``, which a quantile function keeps), so
     the statistics are in each QoI's unit and the variance in its square: units per element ``qoi_units`` and
     ``qoi_units_squared``, which the caller attaches (:func:`.qois.qoi_coords`)."""
     from SALib.analyze import morris as morris_analyze

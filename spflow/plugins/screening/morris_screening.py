@@ -20,7 +20,7 @@ from .screening_stage import SCREENING_PARAMS, ScreeningStage
 
 class MorrisScreening(ScreeningStage):
     name = "morris_screening"
-    version = "4"
+    version = "5"  # 5: the space's marginals (uniform: the box, unchanged design; issue #24)
     description = "Morris elementary-effects screening (SALib) of a parameter space on the forward model"
     output = MORRIS_SCREENING
     method = "morris"
@@ -37,8 +37,9 @@ class MorrisScreening(ScreeningStage):
     def _runs(self, d):
         return self.params["trajectories"] * (d + 1)
 
-    def _sample(self, names, lower, upper, rng):
-        return morris_sample(names, lower, upper, self.params["trajectories"], levels=self.params["levels"], seed=rng)
+    def _sample(self, names, lower, upper, rng, inputs):
+        return morris_sample(names, lower, upper, self.params["trajectories"], levels=self.params["levels"], seed=rng,
+                             inputs=inputs)
 
     def _analyse(self, names, x, y, lower, upper, rng) -> xr.Dataset:
         return morris_indices(x, y, names, lower, upper, levels=self.params["levels"],

@@ -1,6 +1,7 @@
 """What every screening stage shares (thesis Algorithm 1): parameters, checks, the forward runs and the output layout.
 
-A subclass supplies the method: ``_runs(d)`` (model runs of a d-parameter design), ``_sample(...)`` (the design),
+A subclass supplies the method: ``_runs(d)`` (model runs of a d-parameter design), ``_sample(...)`` (the design,
+uniform on the box, or drawn from the marginals the space records: :mod:`.salib_glue`),
 ``_analyse(...)`` (per-QoI measures over (``qoi``, ``param``) plus the QoI ``variance``) and ``_score(...)``
 (the selection score per parameter of one design). The base class
 
@@ -10,12 +11,19 @@ A subclass supplies the method: ``_runs(d)`` (model runs of a d-parameter design
    rows with the other parameters at the space's defaults, and runs them all in one ``forward`` stage call, so
    the simulations parallelise through ``ctx`` (:class:`spflow.plugins.forward.stage.Forward`);
 3. turns the responses into QoIs (:mod:`.qois`), analyses each design, applies the selection rule
-   (:mod:`.selection`) and returns the measures with the screened space, group labels, scores and selection.
+   (:mod:`.selection`) and returns the measures with the screened space (and its marginals, when it records any),
+   group labels, scores and selection.
+
+The marginals a space records (``distribution`` / ``distribution_parameters``, e.g. the ``priors`` stage's truncated
+normals) must have the space's ranges as supports (as for the surrogates); the parameter a design holds fixed stays at
+the space's ``default``. Which law each parameter was screened under is printed (``verbose``) and recorded in the
+output (attr ``marginals``, and the two variables).
 """
 
 from __future__ import annotations
 
 import hashlib
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -33,6 +41,8 @@ from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.stage import Forward
+from spflow.plugins.surrogates.input_marginals import Uniform, marginal_variables
+from spflow.plugins.surrogates.training_data import space_marginals
 
 from .groups import blocks_for, full_design, resolve_groups
 from .qois import QOI_CHOICES, qoi_coords, qoi_matrix
@@ -94,7 +104,7 @@ class ScreeningStage(Stage):
     def _runs(self, d: int) -> int:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def _sample(self, names, lower, upper, rng) -> np.ndarray:  # pragma: no cover - abstract
+    def _sample(self, names, lower, upper, rng, inputs) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
 
     def _analyse(self, names, x, y, lower, upper, rng) -> xr.Dataset:  # pragma: no cover - abstract
@@ -120,9 +130,16 @@ class ScreeningStage(Stage):
         mapping = ParameterMap.of(space)
         groups = self._checked_groups(names, mapping)
         lower, upper, default = (space[k].values.astype(float) for k in ("lower", "upper", "default"))
+        recorded = space_marginals(space, names, lower, upper, f"stage {self.name!r}")
+        inputs = recorded or [Uniform(lo, hi) for lo, hi in zip(lower, upper)]
+        laws = "\n  ".join(f"{n} ~ {m!r}" for n, m in zip(names, inputs))
+        if ctx.verbose:
+            note = "" if recorded else " (the space records no marginals: uniform on its ranges)"
+            print(f"[{ctx.node}] screening under{note}:\n  {laws}", file=sys.stderr, flush=True)
         blocks = blocks_for(names, groups, self.params["mode"], self._runs)
         streams = [s.spawn(2) for s in np.random.SeedSequence(self.params["seed"]).spawn(len(blocks))]
-        samples = [self._sample(b.names, lower[b.columns], upper[b.columns], np.random.default_rng(s[0]))
+        samples = [self._sample(b.names, lower[b.columns], upper[b.columns], np.random.default_rng(s[0]),
+                                None if recorded is None else [recorded[c] for c in b.columns])
                    for b, s in zip(blocks, streams)]
         design = mapping.design(full_design(default, blocks, samples))
         responses = self._forward.run(ctx, design=design)
@@ -144,6 +161,8 @@ class ScreeningStage(Stage):
         out = out.assign_coords(group=("param", np.array([group_of[n] for n in names])))
         for k in ("lower", "upper", "default", "unit"):
             out[k] = space[k]
+        if recorded is not None:
+            out = out.assign(marginal_variables(recorded))
         out = mapping.attach(out)
         out["selected"] = ("param", self.rule.apply(out["score"].values, out["group"].values),
                            {"rule": self.rule.describe()})
@@ -158,6 +177,8 @@ class ScreeningStage(Stage):
             "conf_level": self.params["conf_level"],
             "select_on": ", ".join(self.params["select_on"]),
             "selection_rule": self.rule.describe(),
+            "marginals": laws.replace("\n  ", "\n") if recorded else "uniform on the ranges (the space records no "
+                                                                      "marginals)",
             **self._attrs(),
         }
         return out

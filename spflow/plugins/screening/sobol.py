@@ -17,7 +17,7 @@ import xarray as xr
 from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 
-from .salib_glue import is_constant, salib_problem
+from .salib_glue import is_constant, salib_design, salib_problem
 
 __all__ = ["check_base_samples", "sobol_runs", "sobol_sample", "sobol_indices"]
 
@@ -36,14 +36,17 @@ def sobol_runs(samples: int, d: int, calc_second_order: bool) -> int:
 
 
 def sobol_sample(names: list[str], lower: np.ndarray, upper: np.ndarray, samples: int, *,
-                 calc_second_order: bool = False, seed: int | np.random.Generator | None = None) -> np.ndarray:
+                 calc_second_order: bool = False, seed: int | np.random.Generator | None = None,
+                 inputs=None) -> np.ndarray:
     """The (``sobol_runs``, d) Saltelli design on the box ``lower``..``upper`` (physical units), in SALib's row order;
-    ``samples`` (N) must be a power of two."""
+    ``samples`` (N) must be a power of two. With ``inputs`` (one marginal per name,
+    :mod:`spflow.plugins.surrogates.input_marginals`) the design is drawn from the marginals (:mod:`.salib_glue`), so
+    :func:`sobol_indices` of its evaluations are the indices under them."""
     from SALib.sample import sobol as sobol_sampler  # SALib loads when a design is drawn
 
     check_base_samples(samples)
-    return sobol_sampler.sample(salib_problem(names, lower, upper), samples, calc_second_order=calc_second_order,
-                                scramble=True, seed=seed)
+    return salib_design(lambda problem: sobol_sampler.sample(problem, samples, calc_second_order=calc_second_order,
+                                                             scramble=True, seed=seed), names, lower, upper, inputs)
 
 
 def sobol_indices(y: np.ndarray, names: list[str], *, calc_second_order: bool = False, conf_level: float = 0.95,

@@ -21,7 +21,7 @@ from .sobol import check_base_samples, sobol_indices, sobol_runs, sobol_sample
 
 class SobolScreening(ScreeningStage):
     name = "sobol_screening"
-    version = "4"
+    version = "5"  # 5: the space's marginals (uniform: the box, unchanged design; issue #24)
     description = "Sobol' sensitivity screening (SALib) of a parameter space on the forward model"
     output = SOBOL_SCREENING
     method = "sobol"
@@ -38,9 +38,9 @@ class SobolScreening(ScreeningStage):
     def _runs(self, d):
         return sobol_runs(self.params["samples"], d, self.params["calc_second_order"])
 
-    def _sample(self, names, lower, upper, rng):
+    def _sample(self, names, lower, upper, rng, inputs):
         return sobol_sample(names, lower, upper, self.params["samples"],
-                            calc_second_order=self.params["calc_second_order"], seed=rng)
+                            calc_second_order=self.params["calc_second_order"], seed=rng, inputs=inputs)
 
     def _analyse(self, names, x, y, lower, upper, rng) -> xr.Dataset:
         return sobol_indices(y, names, calc_second_order=self.params["calc_second_order"],

@@ -29,6 +29,7 @@ from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 
 from .contract import STORED_SURROGATE, with_parameter_units
+from .input_marginals import from_unit_hypercube
 from .pce_model import PCE
 from .pce_stage import PCE_PARAMS, check_lists, fit_options
 from .training_data import space_marginals, training_set
@@ -83,7 +84,7 @@ class AdaptivePCE(Stage):
         if inputs is None:
             values = qmc.scale(unit, lower, upper)
         else:
-            values = np.clip(np.column_stack([m.ppf(unit[:, j]) for j, m in enumerate(inputs)]), lower, upper)
+            values = np.clip(from_unit_hypercube(inputs, unit), lower, upper)
         return ParameterMap.of(space).design(values)
 
     def run(self, ctx: StageContext, space: xr.Dataset) -> xr.Dataset:

@@ -44,8 +44,8 @@ from spflow.plugins.forward.checks import check_number
 from .orthonormal_polynomials import HERMITE, LEGENDRE, PolynomialFamily, jacobi, truncated_hermite
 
 __all__ = ["Marginal", "Uniform", "Normal", "LogNormal", "TruncatedNormal", "Beta", "MARGINALS",
-           "marginal_from_record", "check_support", "first_outside", "marginal_variables", "marginals_from_dataset",
-           "DISTRIBUTION_LONG_NAME", "PARAMETERS_LONG_NAME"]
+           "marginal_from_record", "check_support", "first_outside", "from_unit_hypercube", "marginal_variables",
+           "marginals_from_dataset", "DISTRIBUTION_LONG_NAME", "PARAMETERS_LONG_NAME"]
 
 #: CF long names of the two string variables (along ``param``) that record the marginals in a Dataset.
 DISTRIBUTION_LONG_NAME = "marginal law of the input (uniform, normal, lognormal, truncated_normal, beta)"
@@ -122,6 +122,10 @@ class Marginal(ABC):
 
     def ppf(self, u: np.ndarray) -> np.ndarray:
         return self.frozen().ppf(u)
+
+    def logpdf(self, x: np.ndarray) -> np.ndarray:
+        """log density of x (−inf outside the support)."""
+        return self.frozen().logpdf(x)
 
     def contains(self, x: np.ndarray) -> np.ndarray:
         """True where ``x`` lies in the support (a bounded end with a slack of 1e-9 of the width, for round-off)."""
@@ -321,6 +325,14 @@ def marginals_from_dataset(ds, where: str) -> list[Marginal] | None:
     names = [str(n) for n in ds["param"].values]
     return [marginal_from_record(str(f), str(p), where=f"{where}, parameter {n!r}")
             for n, f, p in zip(names, ds["distribution"].values, ds["distribution_parameters"].values)]
+
+
+def from_unit_hypercube(inputs, u: np.ndarray) -> np.ndarray:
+    """Points (n, d) of the unit hypercube ``u`` mapped column by column through each marginal's quantile function
+    (:meth:`Marginal.ppf`): the isoprobabilistic transform from independent U[0, 1] variables, by which a design drawn
+    on [0, 1]^d (Latin hypercube, Sobol', Morris) is drawn from the marginals ``inputs``."""
+    u = np.asarray(u, dtype=float)
+    return np.column_stack([m.ppf(u[:, j]) for j, m in enumerate(inputs)])
 
 
 def first_outside(inputs, x: np.ndarray) -> tuple[int, int] | None:

@@ -74,12 +74,14 @@ def training_set(space: xr.Dataset, design: xr.Dataset, responses: xr.Dataset, v
     return TrainingSet(names, lower, upper, x[kept], y, outputs, space_marginals(space, names, lower, upper))
 
 
-def space_marginals(space: xr.Dataset, names: list[str], lower: np.ndarray, upper: np.ndarray) -> list[Marginal] | None:
-    """The marginals a parameter ``space`` records (None when it records none), each with support [lower, upper]."""
-    inputs = marginals_from_dataset(space, "surrogate data: the parameter space")
+def space_marginals(space: xr.Dataset, names: list[str], lower: np.ndarray, upper: np.ndarray,
+                    where: str = "surrogate data") -> list[Marginal] | None:
+    """The marginals a parameter ``space`` records (None when it records none), each with support [lower, upper];
+    ``where`` (the stage reading the space) starts the error messages."""
+    inputs = marginals_from_dataset(space, f"{where}: the parameter space")
     for name, marginal, lo, hi in zip(names, inputs or [], lower, upper):
         if marginal.support != (lo, hi):
-            raise ParameterError(f"surrogate data: parameter {name!r} of the space has the distribution {marginal!r} "
+            raise ParameterError(f"{where}: parameter {name!r} of the space has the distribution {marginal!r} "
                                  f"with support {marginal.support_text()}, not the space's range [{lo:g}, {hi:g}]; "
                                  f"a space's marginals must live on its range (uniform, truncated_normal or beta "
                                  f"with lower/upper = the range)")
