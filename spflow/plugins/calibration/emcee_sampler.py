@@ -54,7 +54,7 @@ def initial_points(model: PosteriorModel, count: int, how: str, draws: int, rng:
 
 class EmceeSampler(SamplerStage):
     name = "emcee_sampler"
-    version = "3"
+    version = "4"  # 4: every unit in UDUNITS form (issue 23)
     description = "emcee ensemble MCMC on a surrogate posterior (thesis §4.6, Eqs. 4.1-4.5)"
     params = SamplerStage.common_params | {
         "walkers": Param(int, 0, bounds=(0, 4096), doc="walkers per run, >= 2 x sampled dimensions (0: exactly that)"),

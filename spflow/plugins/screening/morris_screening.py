@@ -20,7 +20,7 @@ from .screening_stage import SCREENING_PARAMS, ScreeningStage
 
 class MorrisScreening(ScreeningStage):
     name = "morris_screening"
-    version = "4"
+    version = "5"  # 5: every unit in UDUNITS form (issue 23)
     description = "Morris elementary-effects screening (SALib) of a parameter space on the forward model"
     output = MORRIS_SCREENING
     method = "morris"
