@@ -39,7 +39,7 @@ import networkx as nx
 import xarray as xr
 
 from .cache import Store
-from .cf_metadata import CONVENTIONS, claims_cf
+from .cf_metadata import CONVENTIONS, claims_cf, note_units
 from .errors import CacheError, CacheIntegrityWarning, CacheWarning, PipelineError, SchemaError, StageError
 from .pipeline import Pipeline
 from .plugins import get_registry
@@ -358,6 +358,7 @@ class _NodeOps:
             if stage.output is not None:
                 out = stage.output.annotate(out)
                 stage.output.validate(out, stage=stage.name, port="output")
+            out = note_units(out)
             if claims_cf(out):
                 out = out.assign_attrs(Conventions=CONVENTIONS)
             meta = dict(self.plan.prov[name], node=name, pipeline=self.plan.pipeline.name, seconds=round(seconds, 6))

@@ -236,11 +236,13 @@ def test_ranked_table_schema(toy):
     assert table["expected_log_ratio"].dims == ("design", "truth", "alternative")
     assert table["accuracy"].dims == ("design", "truth")
     assert list(table["truth"].values) == ["shear_thinning", "viscosity"]
-    for name, unit in (("expected_log_ratio", "nat"), ("log_ratio_sd", "nat"), ("decision_margin", "nat"),
+    for name, unit in (("expected_log_ratio", "1"), ("log_ratio_sd", "1"), ("decision_margin", "1"),
                        ("power", "1"), ("accuracy", "1"), ("worst_accuracy", "1"), ("mean_accuracy", "1"),
-                       ("worst_power", "1"), ("worst_expected_log_ratio", "nat"), ("total_pv", "PV"),
-                       ("duration", "h"), ("rank", "1")):
+                       ("worst_power", "1"), ("worst_expected_log_ratio", "1"), ("total_pv", "1"),
+                       ("duration", "h"), ("rank", "1")):  # log ratios in nats and pore volumes are numbers
         assert table[name].attrs["units"] == unit, name
+    assert all("nats" in table[n].attrs["long_name"] for n in ("expected_log_ratio", "log_ratio_sd",
+                                                              "decision_margin", "worst_expected_log_ratio"))
     assert list(table["rank"].values) == list(range(1, n + 1))
     acc = table["worst_accuracy"].values
     assert np.all(np.diff(acc) <= 1e-12)  # ranked by the worst hypothesis's accuracy

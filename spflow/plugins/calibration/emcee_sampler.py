@@ -56,7 +56,8 @@ def initial_points(model: PosteriorModel, count: int, how: str, draws: int, rng:
 
 class EmceeSampler(SamplerStage):
     name = "emcee_sampler"
-    version = "4"  # 4: the prior is the space's marginals (uniform: the box, unchanged draws; issue #24)
+    # 4: the prior is the space's marginals (uniform: the box, unchanged draws; issue #24); every unit in UDUNITS form (issue 23)
+    version = "4"
     description = "emcee ensemble MCMC on a surrogate posterior (thesis §4.6, Eqs. 4.1-4.5)"
     params = SamplerStage.common_params | {
         "walkers": Param(int, 0, bounds=(0, 4096), doc="walkers per run, >= 2 x sampled dimensions (0: exactly that)"),

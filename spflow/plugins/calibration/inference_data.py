@@ -25,10 +25,9 @@ observations it was trained on, and returns the groups
   parameters each column sets, on which scale), so that :func:`read_posterior` gives the draws back as a sampler
   stage's Dataset (the OPM export reads the file through it).
 
-Every numeric variable carries a UDUNITS ``units`` and every variable a ``long_name``, and each group claims
-``Conventions = "CF-1.10"`` (:mod:`spflow.core.cf_metadata`) — but for a parameter whose catalogue unit has no
-UDUNITS form (``NO_UDUNITS_FORM``): it keeps that unit, and the groups holding it (``posterior``, ``prior``,
-``constant_data``) make no CF claim. :func:`write_inference_data` writes the file; the
+Every numeric variable carries a UDUNITS ``units`` (with ``equivalents`` or ``currency`` where UDUNITS cannot say
+what is counted, :func:`~spflow.core.cf_metadata.unit_notes`) and every variable a ``long_name``, and each group
+claims ``Conventions = "CF-1.10"`` (:mod:`spflow.core.cf_metadata`). :func:`write_inference_data` writes the file; the
 ``bayesian_calibration`` report writes it as ``posterior.nc``. ArviZ is imported only here, when called
 (:func:`~.diagnostics.arviz`).
 """
@@ -40,7 +39,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from spflow.core.cf_metadata import CONVENTIONS, claims_cf, udunits
+from spflow.core.cf_metadata import CONVENTIONS, claims_cf, note_units, udunits
 from spflow.core.errors import ParameterError
 from spflow.plugins.design.parameter_map import NAMES_VAR, SCALE_VAR
 from spflow.plugins.surrogates.contract import load_surrogate
@@ -90,12 +89,13 @@ def _name(*parts: str) -> str:
 
 
 def _stamp(ds: xr.Dataset, title: str) -> xr.Dataset:
-    """``ds`` with its title, the chain and draw coordinates' metadata, and ``Conventions`` when it qualifies (a
-    parameter whose unit has no UDUNITS form keeps its catalogue unit, and its groups claim no CF)."""
+    """``ds`` with its title, the chain and draw coordinates' metadata, the notes of its units
+    (:func:`~spflow.core.cf_metadata.note_units`) and ``Conventions`` when it qualifies."""
     ds.attrs["title"] = title
     for dim in ("chain", "draw"):
         if dim in ds.coords:
             ds[dim].attrs.update(units="1", long_name=f"MCMC {dim} number")
+    ds = note_units(ds)
     if claims_cf(ds):
         ds.attrs["Conventions"] = CONVENTIONS
     return ds
@@ -193,8 +193,9 @@ def to_inference_data(posterior: xr.Dataset, surrogate: xr.Dataset, observations
     sampler["thinned_by"] = thin
     groups = {"posterior": post, "sample_stats": stats, "log_likelihood": log_lik, "observed_data": observed,
               "posterior_predictive": predictive, "prior": prior, "constant_data": constant}
-    for group, ds in groups.items():
-        _stamp(ds, f"spflow MCMC posterior: {group}").attrs.update(sampler)
+    groups = {group: _stamp(ds, f"spflow MCMC posterior: {group}") for group, ds in groups.items()}
+    for ds in groups.values():
+        ds.attrs.update(sampler)
     return az.InferenceData(**groups)
 
 

@@ -56,7 +56,8 @@ class GaussianProposal:
 
 class MHSampler(SamplerStage):
     name = "mh_sampler"
-    version = "4"  # 4: the prior is the space's marginals (uniform: the box, unchanged draws; issue #24)
+    # 4: the prior is the space's marginals (uniform: the box, unchanged draws; issue #24); every unit in UDUNITS form (issue 23)
+    version = "4"
     description = "adaptive random-walk Metropolis-Hastings on a surrogate posterior (thesis §4.6, PyMC-like)"
     params = SamplerStage.common_params | {
         "tune_interval": Param(int, 500, bounds=(10, 10**7), doc="burn-in steps between proposal updates"),

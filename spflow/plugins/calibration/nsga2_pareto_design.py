@@ -30,7 +30,7 @@ __all__ = ["ParetoDesign"]
 
 class ParetoDesign(Stage):
     name = "pareto_design"
-    version = "3"
+    version = "4"  # 4: every unit in UDUNITS form (issue 23)
     description = "the Pareto sets of an nsga2_calibration at stored generations, as one design"
     inputs = {"calibration": NSGA2_CALIBRATION}
     output = DESIGN_WITH_UNITS
@@ -51,7 +51,8 @@ class ParetoDesign(Stage):
         return ParameterMap.of(calibration).design(
             values, attrs={"design": f"Pareto sets of generations {wanted}"},
             units=calibration["param_unit"].values.astype(str).tolist(),
-            generation=("sample", np.repeat(wanted, [len(f) for f in fronts])))
+            generation=("sample", np.repeat(wanted, [len(f) for f in fronts]),
+                        {"units": "1", "long_name": "NSGA-II generation of the front"}))
 
 
 def _front(calibration: xr.Dataset, generation: int) -> np.ndarray:

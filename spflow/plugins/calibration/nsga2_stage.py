@@ -123,7 +123,7 @@ _MISFIT_PVALUE = 0.01
 
 class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
-    version = "7"
+    version = "8"  # 8: every unit in UDUNITS form (issue 23)
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
     inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
@@ -350,7 +350,7 @@ class NSGA2Calibration(Stage):
                 "calibrated_upper": ("param", designs.max(axis=0), per_param),
             },
             coords={
-                "pareto": np.arange(len(designs)),
+                "pareto": ("pareto", np.arange(len(designs)), {"units": "1", "long_name": "Pareto-front member"}),
                 "param": names,
                 "param_unit": ("param", np.array([udunits(u) for u in space["unit"].values]),
                                {"long_name": "UDUNITS unit of each parameter"}),
@@ -359,7 +359,7 @@ class NSGA2Calibration(Stage):
                                    {"long_name": "UDUNITS unit of each objective"}),
                 "generation": np.arange(1, last + 1),
                 "snapshot": np.array(snaps, dtype=np.int64),
-                "member": np.arange(width),
+                "member": ("member", np.arange(width), {"units": "1", "long_name": "member of a front snapshot"}),
                 "checkpoint": np.array(checks, dtype=np.int64),
                 "experiment": self.held_out_names,
             },

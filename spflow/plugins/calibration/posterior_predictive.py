@@ -59,7 +59,7 @@ def _on_grid(series: xr.DataArray, grid: np.ndarray) -> np.ndarray:
 
 class PosteriorPredictive(Stage):
     name = "posterior_predictive"
-    version = "2"
+    version = "3"  # 3: every unit in UDUNITS form (issue 23)
     description = "simulator on posterior draws: quantile bands (model and with noise) and coverage of observations"
     inputs = {"posterior": POSTERIOR, "space": SPACE, "observations": OBSERVATIONS}
     optional_inputs = frozenset({"observations"})

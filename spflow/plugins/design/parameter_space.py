@@ -39,7 +39,7 @@ def _relative(name: str, relative: float) -> CalibratedParameter:
 
 class ParameterSpace(Stage):
     name = "parameter_space"
-    version = "3"
+    version = "4"  # 4: every unit in UDUNITS form (issue 23)
     description = "uniform bounds on calibrated parameters (UTCHEM names or labels of groups; explicit or ±relative)"
     output = SPACE
     params = {

@@ -83,7 +83,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     _p("BETAP", "-", 1.0, 0.0, 100.0, _PVIS, "divalent weight in the polymer effective salinity (Table 2.4)"),
     _p("CSE1", "meq/ml", 1.0e-4, 1.0e-8, 10.0, _PVIS, "salinity floor of C_SEP (Table 2.4)"),
     _p("SSLOPE", "-", -0.76, -5.0, 5.0, _PVIS, "log-log slope of viscosity vs C_SEP (Table 2.4)"),
-    _p("GAMMAC", "day*darcy^0.5/(ft*s)", 40.0, 0.0, 1.0e4, _PVIS, "in-situ shear-rate coefficient (Table 2.4)"),
+    _p("GAMMAC", "day*darcy^(1/2)/(ft*s)", 40.0, 0.0, 1.0e4, _PVIS, "in-situ shear-rate coefficient (Table 2.4)"),
     _p("GAMHF", "1/s", 60.0, 1.0e-3, 1.0e6, _PVIS, "half-viscosity shear rate (Tables 3.2/4.1 ranges)"),
     _p("POWN", "-", 1.66, 1.0, 5.0, _PVIS, "Meter exponent P_alpha (Table 2.4)"),
     _p("IGAMHF", "-", 0, 0, 1, _PVIS, "0: GAMHF fixed; 1: half shear rate from Eq. 2.5 (A0, A1, A2)", True),
@@ -92,7 +92,11 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     _p("A2", "(wt%)^-1", -12.0, -1.0e3, 1.0e3, _PVIS, "Eq. 2.5 concentration exponent a2 (Table 2.4)"),
     # --- permeability reduction ---
     _p("BRK", "1/wt%", 100.0, 0.0, 1.0e5, _PRK, "permeability-reduction parameter b_rk (Table 2.4)"),
-    _p("CRK", "darcy^0.5*(wt%)^-1/3", 0.068, 0.0, 1.0, _PRK, "permeability-reduction parameter c_rk (Table 2.4)"),
+    # c_rk's unit from Eq. 2.8: 1 - c_rk (AP1 C_SEP^SSLOPE)^(1/3) / (sqrt(k_x k_y)/phi)^(1/2) is a number, with
+    # AP1 in 1/wt% (C_SEP^SSLOPE a number: C_SEP in meq/ml taken as a number, as in Eq. 2.1) and k in darcy, so
+    # c_rk = [darcy^(1/2)] / [(wt%)^(-1/3)] = darcy^(1/2) (wt%)^(1/3): a length, written in UDUNITS as the scaled
+    # metre cf_metadata.CRK_UNIT (docs/forward_model.md, "Units").
+    _p("CRK", "darcy^(1/2)*(wt%)^(1/3)", 0.068, 0.0, 1.0, _PRK, "permeability-reduction parameter c_rk (Table 2.4)"),
     _p("RKCAP", "-", 10.0, 1.0, 1.0e3, _PRK, "cap of R_k,max (Eq. 2.8)"),
     # --- inaccessible pore volume ---
     _p("EPHI3", "-", 1.0, 0.1, 1.0, _IPV, "surfactant-accessible porosity fraction (thesis silent: no IPV)"),

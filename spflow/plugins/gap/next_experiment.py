@@ -330,11 +330,11 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
     ds = xr.Dataset(
         {
             "expected_log_ratio": (dims3, moments["expected"][order], {
-                "units": "nat", "long_name": "expected held-out log predictive ratio of the truth over the "
+                "units": "1", "long_name": "expected held-out log predictive ratio (nats) of the truth over the "
                 "alternative (KL divergence of their predictive distributions)"}),
-            "log_ratio_sd": (dims3, moments["sd"][order], {"units": "nat", "long_name": "its standard deviation"}),
+            "log_ratio_sd": (dims3, moments["sd"][order], {"units": "1", "long_name": "its standard deviation (nats)"}),
             "decision_margin": (dims3, moments["margin"][order], {
-                "units": "nat", "long_name": "max(min_delta, se_factor x root-mean-square measurement SE)"}),
+                "units": "1", "long_name": "decision margin (nats): max(min_delta, se_factor x root-mean-square measurement SE)"}),
             "power": (dims3, power[order], {
                 "units": "1", "long_name": "probability that the decision rule prefers the truth over the "
                 "alternative (simulated)"}),
@@ -346,14 +346,14 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                 "units": "1", "long_name": "decision accuracy averaged over equally likely hypotheses"}),
             "worst_power": ("design", per_design(worst_power), {"units": "1", "long_name": "smallest pair power"}),
             "worst_expected_log_ratio": ("design", per_design(worst_expected), {
-                "units": "nat", "long_name": "smallest expected log predictive ratio over pairs"}),
+                "units": "1", "long_name": "smallest expected log predictive ratio over pairs (nats)"}),
             "rank": ("design", np.arange(1, nd + 1), {"units": "1", "long_name": f"rank by {criterion} (1 = best)"}),
             "label": ("design", np.array([designs[i].label for i in order], dtype=object)),
             "kind": ("design", np.array([designs[i].kind for i in order], dtype=object)),
             "schedule": ("design", np.array([schedule_json(designs[i].schedule) for i in order], dtype=object),
                          {"long_name": "schedule JSON (spflow.io.format.schedule_json)"}),
             "total_pv": ("design", per_design([d.schedule.total_pv for d in designs]),
-                         {"units": "PV", "long_name": "injected pore volumes"}),
+                         {"units": "1", "long_name": "injected pore volumes"}),
             "duration": ("design", per_design([_duration_h(d.schedule, q0, pv_ml) for d in designs]),
                          {"units": "h", "long_name": "injection time at the design's rates"}),
             "n_points": ("design", per_design(points), {"units": "1", "long_name": "measured points compared"}),

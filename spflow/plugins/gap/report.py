@@ -43,6 +43,7 @@ import xarray as xr
 from spflow.core.cf_metadata import UNITS_VARIABLE, udunits
 from spflow.plugins.forward.parameters import PARAMETERS
 from spflow.plugins.forward.run_arguments import common_grid
+from spflow.plugins.forward.stage import RESPONSE_UNITS
 
 from .diagnosis import GapDiagnosis, ModelView
 from .localisation import Cell
@@ -55,6 +56,13 @@ __all__ = ["report_dataset", "summary"]
 _UNITS = {"dp": "Pa", "oil_cut": "1", "recovery": "1", "c_polymer_out": "ppm", "c_surfactant_out": "ppm",
           "salinity_out": "ppm"}
 _SPEC_UNITS = {p.name: p.unit for p in PARAMETERS}
+#: What an effect strength is (a dimensionless scale of its mechanism, docs/gap.md; ``spflow list effects``).
+_STRENGTH = "effect strength (dimensionless scale of the mechanism, see spflow list effects)"
+
+
+def _units_of(variables) -> list[str]:
+    """The UDUNITS unit of each response variable in ``variables`` (the forward stage's ``RESPONSE_UNITS``)."""
+    return [udunits(RESPONSE_UNITS[v]) for v in variables]
 #: Long names of the log-density scores. They are in nats (natural-log units), written ``units = "1"``: UDUNITS reads
 #: "nat" as nano technical atmospheres.
 _NATS = {k: {"long_name": v} for k, v in {
@@ -111,7 +119,8 @@ def _slug_vars(experiments):
     for i, e in enumerate(experiments):
         ends[i, : len(e.schedule.slugs)] = e.slug_ends()
         names[i, : len(e.schedule.slugs)] = [s.name for s in e.schedule.slugs]
-    return {"slug_end_pv": (("experiment", "slug"), ends, {"units": "PV"}),
+    return {"slug_end_pv": (("experiment", "slug"), ends,
+                            {"units": "1", "long_name": "injected pore volumes at the end of each slug"}),
             "slug_name": (("experiment", "slug"), names.astype(str))}
 
 
@@ -122,8 +131,12 @@ def _cell_vars(g: GapDiagnosis, views: list[ModelView]):
         "cell_variable": ("cell", [c.variable for c in base]),
         "cell_experiment": ("cell", [c.experiment for c in base]),
         "cell_slug": ("cell", [c.slug_name for c in base]),
-        "cell_pv_start": ("cell", [c.pv_start for c in base], {"units": "PV"}),
-        "cell_pv_end": ("cell", [c.pv_end for c in base], {"units": "PV"}),
+        "cell_pv_start": ("cell", [c.pv_start for c in base], {"units": "1", "long_name": "injected pore volumes at "
+                                                                                         "the start of the cell"}),
+        "cell_pv_end": ("cell", [c.pv_end for c in base], {"units": "1", "long_name": "injected pore volumes at the "
+                                                                                     "end of the cell"}),
+        "cell_units": ("cell", _units_of([c.variable for c in base]),
+                       {"long_name": "UDUNITS unit of each cell's variable"}),
     }
     data = {
         "cell_n": ("cell", [c.n for c in base], {"units": "1"}),
@@ -132,7 +145,7 @@ def _cell_vars(g: GapDiagnosis, views: list[ModelView]):
         "cell_pvalue": (("model", "cell"), [[c.pvalue for c in v.cells] for v in views], {"units": "1"}),
         "cell_bias_z": (("model", "cell"), [[c.bias_z for c in v.cells] for v in views], {"units": "1"}),
         "cell_rms": (("model", "cell"), [[c.rms for c in v.cells] for v in views],
-                     {"units": "of cell_variable (Pa for dp, 1 for fractions, ppm for concentrations)"}),
+                     {UNITS_VARIABLE: "cell_units", "long_name": "root-mean-square residual of the cell"}),
         "gap_rank": ("cell", [rank.get((c.variable, c.experiment, c.slug), 0) for c in base], {"units": "1"}),
     }
     return coords, data
@@ -142,7 +155,9 @@ def _block_vars(g: GapDiagnosis, views: list[ModelView]):
     blocks = g.layout_all.blocks
     slices = g.layout_all.slices()
     coords = {"block_variable": ("block", [b.variable for b in blocks]),
-              "block_experiment": ("block", [b.experiment for b in blocks])}
+              "block_experiment": ("block", [b.experiment for b in blocks]),
+              "block_units": ("block", _units_of([b.variable for b in blocks]),
+                              {"long_name": "UDUNITS unit of each block's variable"})}
     q = [[v.ljung_box[(b.variable, b.experiment)][0] for b in blocks] for v in views]
     p = [[v.ljung_box[(b.variable, b.experiment)][1] for b in blocks] for v in views]
     rmse = [list(block_rmse(g.layout_all, v.residual).values()) for v in views]
@@ -150,7 +165,7 @@ def _block_vars(g: GapDiagnosis, views: list[ModelView]):
     data = {
         "whiteness_q": (("model", "block"), q, {"units": "1", "long_name": "Ljung-Box Q of whitened residuals"}),
         "whiteness_pvalue": (("model", "block"), p, {"units": "1"}),
-        "rmse": (("model", "block"), rmse, {"units": "of block_variable"}),
+        "rmse": (("model", "block"), rmse, {UNITS_VARIABLE: "block_units", "long_name": "root-mean-square residual"}),
         "coverage": (("model", "block"), cov, {"units": "1", "long_name": f"{g.options.interval:g} interval coverage"}),
     }
     return coords, data
@@ -160,12 +175,14 @@ def _signature_vars(g: GapDiagnosis, views: list[ModelView]):
     keys = [(e, k) for e, table in views[0].signatures.items() for k in table]
     coords = {"signature_experiment": ("signature", [e for e, _ in keys]),
               "signature_name": ("signature", [k for _, k in keys]),
-              "signature_units": ("signature", [SIGNATURE_UNITS[k.split(":")[0]] for _, k in keys])}
+              "signature_units": ("signature", [udunits(SIGNATURE_UNITS[k.split(":")[0]]) for _, k in keys],
+                                  {"long_name": "UDUNITS unit of each signature"})}
     data = {
         "signature_observed": ("signature", [views[0].signatures[e][k][0] for e, k in keys],
-                               {"units": "see signature_units"}),
+                               {UNITS_VARIABLE: "signature_units", "long_name": "observed signature"}),
         "signature_predicted": (("model", "signature"), [[v.predicted_signatures[e].get(k, np.nan) for e, k in keys]
-                                                         for v in views], {"units": "see signature_units"}),
+                                                         for v in views],
+                                {UNITS_VARIABLE: "signature_units", "long_name": "predicted signature"}),
         "signature_pvalue": (("model", "signature"), [[v.signatures[e][k][1] for e, k in keys] for v in views],
                              {"units": "1", "long_name": "two-sided posterior-predictive p-value"}),
     }
@@ -177,17 +194,19 @@ def _change_point_vars(views: list[ModelView], models: list[str]):
     coords = {"cp_model": ("change_point", np.array([m for m, _ in rows], dtype=str)),
               "cp_variable": ("change_point", np.array([c.variable for _, c in rows], dtype=str)),
               "cp_experiment": ("change_point", np.array([c.experiment for _, c in rows], dtype=str)),
-              "cp_slug": ("change_point", np.array([c.slug_name for _, c in rows], dtype=str))}
+              "cp_slug": ("change_point", np.array([c.slug_name for _, c in rows], dtype=str)),
+              "cp_units": ("change_point", np.array(_units_of([c.variable for _, c in rows]), dtype=str),
+                           {"long_name": "UDUNITS unit of each change point's variable"})}
     data = {
-        "cp_pv": ("change_point", np.array([c.pv for _, c in rows], float), {"units": "PV"}),
+        "cp_pv": ("change_point", np.array([c.pv for _, c in rows], float),
+                  {"units": "1", "long_name": "injected pore volumes at the change point"}),
         "cp_statistic": ("change_point", np.array([c.statistic for _, c in rows], float),
                          {"units": "1", "long_name": "max |t| of a mean shift inside the slug"}),
         "cp_pvalue": ("change_point", np.array([c.pvalue for _, c in rows], float), {"units": "1"}),
         "cp_shift_whitened": ("change_point", np.array([c.shift_whitened for _, c in rows], float),
                               {"units": "1", "long_name": "mean shift of the whitened residuals (sigma)"}),
         "cp_shift": ("change_point", np.array([c.shift for _, c in rows], float),
-                     {"units": "of cp_variable (Pa for dp, 1 for fractions, ppm for concentrations)",
-                      "long_name": "mean shift of the residuals (model - data)"}),
+                     {UNITS_VARIABLE: "cp_units", "long_name": "mean shift of the residuals (model - data)"}),
     }
     return coords, data
 
@@ -199,7 +218,9 @@ def _correlation_vars(views: list[ModelView]):
     coords = {"xcorr_variable": ("input_correlation", np.array([k[0] for k in keys], dtype=str)),
               "xcorr_experiment": ("input_correlation", np.array([k[1] for k in keys], dtype=str)),
               "xcorr_channel": ("input_correlation", np.array([k[2] for k in keys], dtype=str)),
-              "lag": ("lag", lags, {"units": "PV"})}
+              "xcorr_units": ("input_correlation", np.array(_units_of([k[0] for k in keys]), dtype=str),
+                              {"long_name": "UDUNITS unit of each residual's variable"}),
+              "lag": ("lag", lags, {"units": "1", "long_name": "lag in injected pore volumes"})}
 
     def table(f):
         return np.array([[f(t[k]) for k in keys] for t in tables], dtype=float).reshape(len(views), len(keys))
@@ -209,12 +230,13 @@ def _correlation_vars(views: list[ModelView]):
                     np.array([[t[k].z for k in keys] for t in tables], float).reshape(len(views), len(keys),
                                                                                       lags.size),
                     {"units": "1", "long_name": "GLS z of the residual on the lagged input channel"}),
-        "xcorr_lag": (("model", "input_correlation"), table(lambda c: c.lag), {"units": "PV"}),
+        "xcorr_lag": (("model", "input_correlation"), table(lambda c: c.lag),
+                      {"units": "1", "long_name": "lag of max |z| in injected pore volumes"}),
         "xcorr_statistic": (("model", "input_correlation"), table(lambda c: c.statistic), {"units": "1"}),
         "xcorr_pvalue": (("model", "input_correlation"), table(lambda c: c.pvalue),
                          {"units": "1", "long_name": "p-value of max |z| over the lags"}),
         "xcorr_effect": (("model", "input_correlation"), table(lambda c: c.effect),
-                         {"units": "of xcorr_variable", "long_name": "residual change with the channel's step"}),
+                         {UNITS_VARIABLE: "xcorr_units", "long_name": "residual change with the channel's step"}),
         "xcorr_significant": (("model", "input_correlation"), table(lambda c: c.significant).astype(np.int8),
                               {"units": "1"}),
     }
@@ -254,15 +276,18 @@ def _candidate_vars(g: GapDiagnosis):
     first = g.steps[0].screen
     order = [first.names.index(n) for n in names]
     cos = first.cos[np.ix_(order, order)]
-    units = {"fitted_strength": "effect strength (see spflow list effects)"}
-    data = {k: (("step", "candidate"), v, {"units": units.get(k, "1"), **_NATS.get(k, {})}) for k, v in tables.items()}
+    names_of = {"fitted_strength": {"long_name": f"fitted {_STRENGTH}"}} | _NATS
+    data = {k: (("step", "candidate"), v, {"units": "1", **names_of.get(k, {})}) for k, v in tables.items()}
     data |= {k: (("step", "candidate"), v, {"units": "1"}) for k, v in flags.items()}
     data["step_reference"] = ("step", [s.reference for s in g.steps])
     data["step_scored_against"] = ("step", [s.scored_against for s in g.steps])
     data["fingerprint_cos"] = (("candidate", "candidate_b"), cos, {"units": "1"})
-    data["base_strength"] = ("candidate", [c.base for c in g.candidates], {"units": "effect strength"})
-    data["physical_lower"] = ("candidate", [c.physical[0] for c in g.candidates], {"units": "effect strength"})
-    data["physical_upper"] = ("candidate", [c.physical[1] for c in g.candidates], {"units": "effect strength"})
+    data["base_strength"] = ("candidate", [c.base for c in g.candidates],
+                             {"units": "1", "long_name": f"base-model {_STRENGTH}"})
+    data["physical_lower"] = ("candidate", [c.physical[0] for c in g.candidates],
+                              {"units": "1", "long_name": f"lower end of the physical range of the {_STRENGTH}"})
+    data["physical_upper"] = ("candidate", [c.physical[1] for c in g.candidates],
+                              {"units": "1", "long_name": f"upper end of the physical range of the {_STRENGTH}"})
     return {"candidate": names, "candidate_b": names}, data
 
 
@@ -294,7 +319,7 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
     positions = {e.name: p for e, p in zip(experiments, pos)}
     data = _series_vars(g, views, grid, positions) | _score_vars(g, grid, positions) | _slug_vars(experiments)
     coords = {"model": ["base", "final"], "experiment": [e.name for e in experiments],
-              "pv": ("pv", grid, {"units": "PV"}),
+              "pv": ("pv", grid, {"units": "1", "long_name": "injected pore volumes"}),
               "role": ("experiment", ["calibration"] * len(g.calibration) + ["heldout"] * len(g.heldout))}
     for part in (_cell_vars(g, views), _block_vars(g, views), _signature_vars(g, views), _candidate_vars(g),
                  _change_point_vars(views, ["base", "final"]), _correlation_vars(views)):

@@ -111,6 +111,7 @@ def options_from(values: dict) -> Options:
 
 class Diagnose(Stage):
     name = "diagnose"
+    # 7: the targeted gap test and the expanded shortlist (issue 20); every unit in UDUNITS form (issue 23)
     version = "7"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}

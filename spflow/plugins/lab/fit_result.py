@@ -70,8 +70,8 @@ FIT = DatasetSchema(
 def unit_variables(units: Sequence[str]) -> dict[str, tuple]:
     """The unit variables of a FIT dataset for parameters in ``units`` (the forward model's catalogue notation or
     UDUNITS): ``unit`` (``param``), each parameter's UDUNITS unit (:func:`~spflow.core.cf_metadata.udunits`), and
-    ``covariance_units`` (``param``, ``param_``), the product of the units of each pair. A unit with no UDUNITS form
-    (``meq/ml``: :data:`~spflow.core.cf_metadata.NO_UDUNITS_FORM`) stays as written."""
+    ``covariance_units`` (``param``, ``param_``), the product of the units of each pair (``meq/ml`` is written
+    ``mmol/ml``; the executor adds the ``equivalents`` note, :func:`~spflow.core.cf_metadata.note_units`)."""
     unit = [udunits(u) for u in units]
     return {"unit": ("param", np.array(unit, dtype=str), {"long_name": "UDUNITS unit of each parameter"}),
             "covariance_units": (("param", "param_"), np.array([[product_unit(a, b) for b in unit] for a in unit],

@@ -50,7 +50,7 @@ _PATH_DOC = "lab table (CSV, spflow lab-table format); empty = the bundled synth
 
 class FitPolymerRheology(Stage):
     name = "fit_polymer_rheology"
-    version = "2"
+    version = "3"  # 3: units in UDUNITS form (meq/ml written mmol/ml), issue 23
     description = "fit AP1-3, SSLOPE, BETAP, POWN and Eq. 2.5 A0-A2 to polymer shear sweeps (Eqs. 2.1-2.5)"
     output = FIT
     params = {"path": Param(str, "", doc=_PATH_DOC)}
@@ -68,7 +68,7 @@ class FitPolymerRheology(Stage):
 
 class FitPolymerCoreflood(Stage):
     name = "fit_polymer_coreflood"
-    version = "2"
+    version = "3"  # 3: units in UDUNITS form (meq/ml written mmol/ml), issue 23
     description = "fit PERM, BRK, CRK to a single-phase polymer coreflood pressure history (Eqs. 2.6-2.8)"
     inputs = {"rheology": FIT}
     optional_inputs = frozenset({"rheology"})
@@ -96,7 +96,7 @@ class FitPolymerCoreflood(Stage):
 
 class FitAdsorption(Stage):
     name = "fit_adsorption"
-    version = "2"
+    version = "3"  # 3: units in UDUNITS form (meq/ml written mmol/ml), issue 23
     description = "fit Langmuir AD41/AD42/B4D or AD31/AD32/B3D to static retention data (Eqs. 2.15-2.16)"
     output = FIT
     params = {
@@ -120,7 +120,7 @@ class FitAdsorption(Stage):
 
 class FitTracer(Stage):
     name = "fit_tracer"
-    version = "2"
+    version = "3"  # 3: units in UDUNITS form (meq/ml written mmol/ml), issue 23
     description = "fit the dispersivity ALPHAL1 and the TDS-EC slope to an effluent conductivity curve (Fig. 2.9)"
     output = FIT
     params = {

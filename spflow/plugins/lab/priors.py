@@ -79,7 +79,9 @@ def prior_box(name: str, estimate: float, std: float, *, mode: str, relative: fl
 
 class Priors(Stage):
     name = "priors"
-    version = "3"  # 3: distribution="truncated_normal"; the marginals recorded in the space (issue #24)
+    # 3: distribution="truncated_normal"; the marginals recorded in the space (issue #24); 4: every unit in UDUNITS
+    # form (issue 23)
+    version = "4"
     description = ("priors around lab-fit estimates (±20 % rule of Algorithm 1, or k fit standard errors), uniform "
                    "or truncated normal")
     inputs = {port: FIT for port in FIT_PORTS}

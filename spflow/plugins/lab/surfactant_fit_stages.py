@@ -30,7 +30,7 @@ __all__ = ["FitPhaseBehaviour", "FitIFT", "FitMEViscosity", "FitDesaturation"]
 class _LabTableFit(Stage):
     """A stage fitting one lab table: subclasses set ``kind``, ``read`` (path -> Dataset) and ``fit``."""
 
-    version = "2"
+    version = "3"  # 3: units in UDUNITS form (meq/ml written mmol/ml), issue 23
     kind: ClassVar[str] = ""
     output = FIT
     read: ClassVar[Callable[[Path], xr.Dataset]]

@@ -20,7 +20,8 @@ from .screening_stage import SCREENING_PARAMS, ScreeningStage
 
 class MorrisScreening(ScreeningStage):
     name = "morris_screening"
-    version = "5"  # 5: the space's marginals (uniform: the box, unchanged design; issue #24)
+    # 5: the space's marginals (uniform: the box, unchanged design; issue #24); every unit in UDUNITS form (issue 23)
+    version = "5"
     description = "Morris elementary-effects screening (SALib) of a parameter space on the forward model"
     output = MORRIS_SCREENING
     method = "morris"

@@ -151,7 +151,8 @@ class ScreeningStage(Stage):
             part = self._analyse(block.names, sample, y[block.rows], lower[block.columns], upper[block.columns],
                                  np.random.default_rng(stream[1]))
             part["variance"] = part["variance"].broadcast_like(part["param"]).transpose("qoi", "param")
-            part["score"] = self._score(part, use).assign_attrs(units="1")
+            part["score"] = self._score(part, use)
+            part["score"].attrs = {"units": "1"}  # a number, whatever units the indices it is built from carry
             parts.append(part)
         out = xr.concat(parts, dim="param", join="outer", combine_attrs="override").reindex(param=names)
         if "param_j" in out.dims:

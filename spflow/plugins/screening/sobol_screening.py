@@ -21,7 +21,8 @@ from .sobol import check_base_samples, sobol_indices, sobol_runs, sobol_sample
 
 class SobolScreening(ScreeningStage):
     name = "sobol_screening"
-    version = "5"  # 5: the space's marginals (uniform: the box, unchanged design; issue #24)
+    # 5: the space's marginals (uniform: the box, unchanged design; issue #24); every unit in UDUNITS form (issue 23)
+    version = "5"
     description = "Sobol' sensitivity screening (SALib) of a parameter space on the forward model"
     output = SOBOL_SCREENING
     method = "sobol"

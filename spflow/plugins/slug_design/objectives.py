@@ -35,7 +35,7 @@ __all__ = ["SlugDesignProblem", "Realisations", "NoisyObjective", "OBJECTIVES", 
 
 #: Names and units of the minimised objectives (columns of Y).
 OBJECTIVES = ("neg_npv", "max_dp")
-OBJECTIVE_UNITS = ("M$", "kPa")
+OBJECTIVE_UNITS = ("1e6", "kPa")  # UDUNITS: -NPV in million US dollars (M$) is the scaled number 1e6
 
 
 @dataclass(frozen=True)

@@ -12,8 +12,8 @@ fronts after selected iterations and after the last one, each with the front unc
 by minimum distance to the utopia point (TMDSM), the knee design's responses over ``knee_draws`` posterior draws with
 one price path each (Figs. 4.9-4.10) and sample price paths of the oil price model (Fig. 4.6). Units are in each
 variable's ``units`` attribute, or per element (:mod:`spflow.core.cf_metadata`): objectives in the
-``objective_units`` coordinate, M$ and kPa (UDUNITS has no currency: "M$" is not a UDUNITS unit), design variables
-in ``design_units`` (pore volumes, "1").
+``objective_units`` coordinate, ``1e6`` (million US dollars, M$: UDUNITS has no currency, so money is the scaled
+number 1e6 with ``currency = "USD"``) and ``kPa``, design variables in ``design_units`` (pore volumes, "1").
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import xarray as xr
 
-from spflow.core.cf_metadata import UNITS_VARIABLE
+from spflow.core.cf_metadata import CURRENCY, UNITS_VARIABLE
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.schema import DatasetSchema, Variable
@@ -84,7 +84,7 @@ def _snapshot_recorder(wanted: set[int], store: dict[int, BGOResult], ctx: Stage
 
 class SlugDesign(Stage):
     name = "slug_design"
-    version = "4"
+    version = "5"  # 5: every unit in UDUNITS form (issue 23)
     description = "slug-size design under price and parameter uncertainty: EEIHV on -NPV and max dp (thesis §4.7)"
     inputs = {"posterior": POSTERIOR}
     optional_inputs = frozenset({"posterior"})
@@ -223,12 +223,14 @@ class SlugDesign(Stage):
             "eaf_objectives": (("eaf_point", "objective"), eaf[:, :2],
                                {**per_objective, "description": "attainment-surface points of the sampled fronts"}),
             "eaf_level": ("eaf_point", eaf[:, 2], {"units": "%", "description": "attainment level of the point"}),
-            "eaf_snapshot": ("eaf_point", np.concatenate(eaf_at), {"units": "iterations"}),
+            "eaf_snapshot": ("eaf_point", np.concatenate(eaf_at), {"units": "1", "long_name": "BGO iteration"}),
             "vorob_expectation": (("vorob_point", "objective"), vorob, per_objective),
-            "vorob_snapshot": ("vorob_point", np.concatenate(vorob_at), {"units": "iterations"}),
+            "vorob_snapshot": ("vorob_point", np.concatenate(vorob_at), {"units": "1", "long_name": "BGO iteration"}),
             "vorob_threshold": ("snapshot", np.array(threshold), {"units": "%"}),
-            "vorob_deviation": ("snapshot", np.array(deviation), {"units": "({})*({})".format(*OBJECTIVE_UNITS)}),
-        }, coords={"snapshot": ("snapshot", np.array(keys), {"units": "iterations"})})
+            "vorob_deviation": ("snapshot", np.array(deviation),
+                                {"units": "({})*({})".format(*OBJECTIVE_UNITS), "currency": CURRENCY,
+                                 "long_name": "Vorob'ev deviation (M$: million US dollars, times kPa)"}),
+        }, coords={"snapshot": ("snapshot", np.array(keys), {"units": "1", "long_name": "BGO iteration"})})
 
     @staticmethod
     def _knee(out: xr.Dataset) -> xr.Dataset:
@@ -258,19 +260,25 @@ class SlugDesign(Stage):
             "knee_dp": (("knee_draw", "pv"), series["dp"] / 1e3, {"units": "kPa"}),
             "knee_oil_cut": (("knee_draw", "pv"), series["oil_cut"], {"units": "1"}),
             "knee_recovery": (("knee_draw", "pv"), series["recovery"], {"units": "1"}),
-            "knee_npv": ("knee_draw", -values[:, 0], {"units": "M$"}),
+            "knee_npv": ("knee_draw", -values[:, 0], {"units": OBJECTIVE_UNITS[0], "currency": CURRENCY,
+                                                      "long_name": "NPV of the knee design (M$: million US dollars)"}),
             "knee_max_dp": ("knee_draw", values[:, 1], {"units": "kPa"}),
             "knee_posterior_draw": ("knee_draw", np.array([i for i, _, _ in xi]), {"units": "1"}),
-        }, coords={"pv": ("pv", pv, {"units": "1", "long_name": "injected pore volumes"}), "knee_draw": np.arange(n)})
+        }, coords={"pv": ("pv", pv, {"units": "1", "long_name": "injected pore volumes"}),
+                   "knee_draw": ("knee_draw", np.arange(n),
+                                 {"units": "1", "long_name": "realisation of the knee design"})})
 
     def _price_paths(self, price: OilPriceModel, years: int) -> xr.Dataset:
         """Sample paths of Eq. 4.12 (Fig. 4.6), kept at no more than about ``_PRICE_TIMES`` times per path."""
         paths = price.paths(years, _PRICE_PATHS, rng=np.random.SeedSequence([self.params["seed"], 2]))
         times = price.times(years)
         keep = np.unique(np.r_[np.arange(0, times.size, max(1, times.size // _PRICE_TIMES)), times.size - 1])
-        return xr.Dataset({"price_path": (("price_sample", "time"), paths[:, keep], {"units": "$/bbl"})},
+        return xr.Dataset({"price_path": (("price_sample", "time"), paths[:, keep],
+                                          {"units": "1/bbl", "currency": CURRENCY,
+                                           "long_name": "oil price (US dollars per barrel)"})},
                           coords={"time": ("time", times[keep], {"units": "year"}),
-                                  "price_sample": np.arange(_PRICE_PATHS)})
+                                  "price_sample": ("price_sample", np.arange(_PRICE_PATHS),
+                                                   {"units": "1", "long_name": "sample price path"})})
 
     def _attrs(self, draws: Realisations) -> dict:
         problem = draws.problem

@@ -1,6 +1,6 @@
 """Polymer permeability reduction R_k and its maximum R_k,max (thesis Eqs. 2.7-2.8; UTCHEM).
 
-Units: ``k_darcy`` is the permeability in darcy (UTCHEM's unit for CRK, darcy^(1/2) (wt %)^(-1/3)), ``csep`` the
+Units: ``k_darcy`` is the permeability in darcy (so CRK is in darcy^(1/2) (wt %)^(1/3), a length), ``csep`` the
 polymer effective salinity in meq/ml (already floored at CSE1 by the caller), ``cp`` in wt %, ``brk`` in 1/(wt %),
 ``ap1`` in 1/(wt %); porosity and R_k are dimensionless.
 """
