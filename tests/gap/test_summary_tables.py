@@ -32,8 +32,9 @@ def _tables(result):
 
 def test_tables_hold_the_summary_numbers_with_their_units():
     tables = _tables(RESULT)
-    assert set(tables) == {"Verdict", "Calibration gap", "Candidate scores", "Gap closed",
+    assert set(tables) == {"Verdict", "Final model's effects", "Calibration gap", "Candidate scores", "Gap closed",
                            "Numerical error in the error model"}
+    assert tables["Final model's effects"].rows == [["capillary_pressure", 0.9]]  # the final fit's strength
     assert tables["Calibration gap"].rows == [[1.5e-9, 0.004, 250.0, 100.0]]
     assert tables["Calibration gap"].units == ["1"] * 4
     assert tables["Verdict"].rows == [["ambiguous", "capillary_pressure, dispersion", "capillary_pressure",
@@ -41,7 +42,7 @@ def test_tables_hold_the_summary_numbers_with_their_units():
     scores = tables["Candidate scores"]
     unit = dict(zip(scores.columns, scores.units))
     assert unit["delta ELPD"] == unit["gap closed"] == unit["screening z"] == "1"  # nats: UDUNITS "1"
-    assert unit["fitted strength"] == ""  # each effect has its own unit
+    assert unit["fitted strength"] == "1"  # an effect's strength scales its mechanism (spflow list effects)
     rows = {r[0]: dict(zip(scores.columns, r)) for r in scores.rows}
     assert rows["capillary_pressure"]["state"] == "declared" and rows["capillary_pressure"]["delta ELPD"] == 12.25
     assert rows["kinetic_adsorption"]["state"] == "tried, not declared"
@@ -61,6 +62,7 @@ def test_without_a_numerical_scale_and_an_unattributed_gap():
                   gap_cells=[{"variable": "dp", "experiment": "BCF1", "slug": "SP"}])
     items = summary_items(result, 1.0)
     assert "Numerical error in the error model" not in _tables(result)
+    assert "Final model's effects" not in _tables(result)  # no effect declared: no table of them
     (line,) = [i for i in items if isinstance(i, str)]
     assert "not attributable to a catalogued mechanism; where: dp:BCF1:SP" in line
     assert _tables(result)["Verdict"].rows == [["unattributed", "-", "-", "capillary_pressure"]]
@@ -69,8 +71,22 @@ def test_without_a_numerical_scale_and_an_unattributed_gap():
 def test_the_report_renders_them_as_html_tables_with_units(tmp_path):
     items = summary_items(RESULT, 12.4)
     page = write_html_report(tmp_path / "report.html", "t", [Section("Gap diagnosis", items)], []).read_text()
-    assert page.count("<table>") == 5 + 2  # the five tables, the (empty) provenance and the software versions
+    assert page.count("<table>") == 6 + 2  # the six tables, the (empty) provenance and the software versions
     assert "<th>delta ELPD <span class='unit'>[1]</span></th>" in page
     assert "<td class='num'>12.25</td>" in page and "<pre>" not in page.split("Gap diagnosis")[1].split("Software")[0]
     text = text_lines(items)
     assert text[0] == "Verdict" and text[1].split()[0] == "verdict"
+
+
+def test_a_run_without_a_recorded_time_says_so():
+    (closed,) = [t for t in summary_items(RESULT, None) if isinstance(t, Table) and t.title.startswith("Gap closed")]
+    assert closed.title == "Gap closed (42 forward runs, time not recorded)"
+
+
+def test_text_from_the_data_is_escaped_in_the_report(tmp_path):
+    result = dict(RESULT, verdict="unattributed", final_model="base & <b>x</b>",
+                  gap_cells=[{"variable": "dp", "experiment": "<script>", "slug": "SP"}])
+    page = write_html_report(tmp_path / "report.html", "t", [Section("Gap diagnosis", summary_items(result, 1.0))],
+                             []).read_text()
+    assert "<td>base &amp; &lt;b&gt;x&lt;/b&gt;</td>" in page and "<b>x</b>" not in page
+    assert "where: dp:&lt;script&gt;:SP" in page and "<script>" not in page

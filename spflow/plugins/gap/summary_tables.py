@@ -1,9 +1,10 @@
-"""What ``spflow diagnose`` prints and puts in ``report.html``: the verdict, the candidates' scores, the gap closed and
-the numerical-error scale as :class:`~spflow.core.report_table.Table` objects with their units (the terminal gets them
-as aligned text, the report as HTML tables), read off the :func:`~spflow.plugins.gap.report.summary` of a report.
+"""What ``spflow diagnose`` prints and puts in ``report.html`` -- and the gap section of ``spflow run gap_diagnosis``'s
+and ``spflow run workflow``'s reports: the verdict, the final model's effects, the candidates' scores, the gap closed
+and the numerical-error scale as :class:`~spflow.core.report_table.Table` objects with their units (the terminal gets
+them as aligned text, the report as HTML tables), read off the :func:`~spflow.plugins.gap.report.summary` of a report.
 
-Log-density scores (ΔELPD and its standard error) are in nats, UDUNITS ``"1"``; fitted strengths are in each
-effect's own unit (``spflow list effects``), so their column carries none.
+Log-density scores (ΔELPD and its standard error) are in nats, UDUNITS ``"1"``; fitted strengths are an effect's
+dimensionless scale (``spflow list effects``; the gap report writes them with units ``"1"``), so ``"1"`` as well.
 """
 
 from __future__ import annotations
@@ -24,6 +25,10 @@ def _verdict(result: dict) -> list[str | Table]:
         [[result["verdict"], ", ".join(result["ambiguity_set"]) or "-",
           ", ".join(e["name"] for e in result["effects"]) or "-", result["final_model"] or "-"]],
         title="Verdict")]
+    if result["effects"]:
+        items.append(Table(["effect", "fitted strength"],
+                           [[e["name"], _or_dash(e["strength"])] for e in result["effects"]], units=["", "1"],
+                           title="Final model's effects (strength: the effect's scale, spflow list effects)"))
     fit = result["fit"]
     items.append(Table(["omnibus p", "targeted p", "base chi2", "dof"],
                        [[_or_dash(fit["chi2_pvalue"]), _or_dash(fit.get("targeted_pvalue")), _or_dash(fit["chi2_base"]),
@@ -48,17 +53,18 @@ def _candidates(result: dict) -> Table:
                      _or_dash(r.get("delta_elpd")), _or_dash(r.get("delta_elpd_se")), _or_dash(r.get("gap_closed")),
                      "" if "passes" not in r else "yes" if r["passes"] else "no"])
     return Table(["candidate", "state", "screening z", "fitted strength", "delta ELPD", "delta ELPD SE",
-                  "gap closed", "passes the rule"], rows, units=["", "", "1", "", "1", "1", "1", ""],
-                 title="Candidate scores (first step; delta ELPD in nats, strength in the effect's unit)")
+                  "gap closed", "passes the rule"], rows, units=["", "", "1", "1", "1", "1", "1", ""],
+                 title="Candidate scores (first step; delta ELPD in nats, strength: the effect's scale)")
 
 
-def _gap_closed(result: dict, seconds: float) -> Table:
+def _gap_closed(result: dict, seconds: float | None) -> Table:
     fit, closed = result["fit"], result["gap_closed"]
     rows = [["calibration", _or_dash(closed["calibration"]), _or_dash(fit["chi2_base"]), _or_dash(fit["chi2_final"])],
             ["held-out", _or_dash(closed["heldout"]), _or_dash(fit["chi2_heldout_base"]),
              _or_dash(fit["chi2_heldout_final"])]]
     return Table(["data", "gap closed", "chi2 base", "chi2 final"], rows, units=["", "1", "1", "1"],
-                 title=f"Gap closed ({result['forward_runs']} forward runs, {seconds:.0f} s)")
+                 title=f"Gap closed ({result['forward_runs']} forward runs, "
+                       + ("time not recorded)" if seconds is None else f"{seconds:.0f} s)"))
 
 
 def _numerical_scale(result: dict) -> Table | None:
@@ -73,9 +79,9 @@ def _numerical_scale(result: dict) -> Table | None:
                        "base model's calibration residuals)")
 
 
-def summary_items(result: dict, seconds: float) -> list[str | Table]:
-    """The verdict, candidate scores, gap closed and numerical-error scale of a diagnosis summary ``result``
-    (``summary.json``), the diagnosis having taken ``seconds``: tables, and the line saying where an unattributed
-    gap is."""
+def summary_items(result: dict, seconds: float | None) -> list[str | Table]:
+    """The verdict, the final model's effects, candidate scores, gap closed and numerical-error scale of a diagnosis
+    summary ``result`` (``summary.json``), the diagnosis having taken ``seconds`` (``None``: not recorded): tables,
+    and the line saying where an unattributed gap is."""
     scale = _numerical_scale(result)
     return [*_verdict(result), _candidates(result), _gap_closed(result, seconds), *([scale] if scale else [])]
