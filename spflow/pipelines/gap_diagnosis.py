@@ -21,6 +21,7 @@ import json
 from pathlib import Path
 
 import spflow
+from spflow.core.report_table import Table
 from spflow.study.pipeline_inputs import StudyInputs
 
 
@@ -36,20 +37,18 @@ def pipeline(cells: int = 60, study=None, quick: bool = False) -> spflow.Pipelin
     return p
 
 
-def report(result: spflow.RunResult, outdir: Path) -> list[str]:
-    """Write the gap report (netCDF), ``summary.json`` and the figures; return the lines to print."""
+def report(result: spflow.RunResult, outdir: Path) -> list[str | Table]:
+    """Write the gap report (netCDF), ``summary.json`` and the figures; return what to print and put in the report:
+    the tables ``spflow diagnose`` shows (:func:`~spflow.plugins.gap.summary_tables.summary_items`) and the files
+    written."""
     from spflow.plugins.gap.figures import write_figures
     from spflow.plugins.gap.report import summary
+    from spflow.plugins.gap.summary_tables import summary_items
 
     gap = result["diagnosis"]
     gap.to_netcdf(outdir / "gap_report.nc")
     info = summary(gap)
     (outdir / "summary.json").write_text(json.dumps(info, indent=2))
     figures = write_figures(gap, outdir)
-    lines = [f"verdict: {info['verdict']}; ambiguity set {info['ambiguity_set']}; final model {info['final_model']}"]
-    lines += [f"  effect {e['name']}: fitted strength {e['strength']:.4g}" for e in info["effects"]]
-    lines.append(f"  gap closed: calibration {info['gap_closed']['calibration']}, held-out "
-                 f"{info['gap_closed']['heldout']}; {info['forward_runs']} forward runs, "
-                 + (f"{seconds:.0f} s" if (seconds := result.seconds("diagnosis")) is not None else "time not recorded"))
-    lines.append(f"wrote {outdir / 'gap_report.nc'}, {outdir / 'summary.json'} and {len(figures)} figures")
-    return lines
+    return [*summary_items(info, result.seconds("diagnosis")),
+            f"wrote {outdir / 'gap_report.nc'}, {outdir / 'summary.json'} and {len(figures)} figures"]
