@@ -775,18 +775,26 @@ def twin_snrs(record: dict) -> dict[str, float]:
     return _snr(base, truth, data[0], tuple(record["variables"]))
 
 
-def add_snrs(file: Path, jobs: int) -> int:
+def add_snrs(file: Path, jobs: int, every: int = 10) -> int:
     """Give every record of ``file`` that lacks it the SNR beyond numerics (and recompute its other SNRs, which
-    are deterministic), rewriting the file atomically once all are done; returns how many were added."""
+    are deterministic); the file is rewritten atomically after every ``every`` twins, so an interrupted run keeps
+    what it finished. Returns how many were added."""
     from joblib import Parallel, delayed
 
     records = [json.loads(line) for line in file.read_text().splitlines()]
     todo = [k for k, r in enumerate(records) if "snr_beyond_numerics" not in r]
-    for k, snrs in zip(todo, Parallel(n_jobs=jobs)(delayed(twin_snrs)(records[k]) for k in todo)):
+
+    def save():
+        tmp = file.with_suffix(".jsonl.tmp")
+        tmp.write_text("".join(json.dumps(r) + "\n" for r in records))
+        tmp.replace(file)
+
+    runs = Parallel(n_jobs=jobs, return_as="generator")(delayed(twin_snrs)(records[k]) for k in todo)
+    for n, (k, snrs) in enumerate(zip(todo, runs), 1):
         records[k].update(snrs)
-    tmp = file.with_suffix(".jsonl.tmp")
-    tmp.write_text("".join(json.dumps(r) + "\n" for r in records))
-    tmp.replace(file)
+        if n % every == 0 or n == len(todo):
+            save()
+            print(f"SNR beyond numerics: {n} of {len(todo)}", flush=True)
     return len(todo)
 
 
