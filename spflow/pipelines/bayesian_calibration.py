@@ -17,7 +17,8 @@ and the posterior, its ``heldout`` ones are predicted (bundled: BCF1 + BCF2 trai
    proxy's error variance added (Eqs. 4.1-4.5), thesis budget 10^5 / 20 000 / 5 per chain, 4 chains.
 4. ``predictive``: the simulator on 200 posterior draws for every observed coreflood (training and held out):
    quantile bands with and without measurement noise and the coverage of the observations (Figs. 4.4-4.5).
-5. ``prior_design`` -> ``prior_responses`` -> ``prior_bands``: the prior response spread, drawn under Fig. 4.5.
+5. ``prior_design`` -> ``prior_responses`` -> ``prior_bands``: the prior response spread, drawn under Fig. 4.5 (a
+   Latin hypercube of the space's prior: uniform on the box, or its recorded marginals, as ``lhs_design`` draws).
 
     spflow run bayesian_calibration --jobs 2
 """

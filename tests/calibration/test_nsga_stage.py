@@ -359,3 +359,31 @@ def test_each_generation_is_reported_as_progress(space, bundled):
     mine = [r for r in reports if r[3] == "generations"]
     assert mine[-1] == ("nsga", 8, 8, "generations")  # the last generation always goes through
     assert [r[1] for r in mine] == sorted(r[1] for r in mine) and set(r[1] for r in mine) <= set(range(1, 9))
+
+
+def test_marginals_cut_inside_the_box_are_refused_and_laws_on_it_are_recorded(space, bundled, capsys):
+    """The search runs on the space's box; a marginal whose support is narrower than its range (today's stage searched
+    the whole box regardless) is refused before any work, and the laws of a space on its box are recorded."""
+    from spflow.plugins.surrogates.input_marginals import (Beta, TruncatedNormal, Uniform, marginal_variables,
+                                                           marginals_from_dataset)
+
+    index = _bcf1_index(bundled)
+    surrogate = _surrogate(space, index, np.zeros((9, len(index))), np.zeros(len(index))).to_dataset()
+    names, lo, hi = list(space["param"].values), space["lower"].values, space["upper"].values
+    laws = [Uniform(a, b) for a, b in zip(lo, hi)]
+    laws[names.index("AD31")] = Beta(2.0, 3.0, 0.0, 1.0)  # AD31's range is [0, 2]: a beta on half of it
+    with pytest.raises(ParameterError, match="nsga2_calibration.*'AD31'.*Beta.*not the space's range \\[0, 2\\]"):
+        _small_run().run(CTX, surrogate=surrogate, observations=bundled, space=space.assign(marginal_variables(laws)))
+    laws[names.index("AD31")] = TruncatedNormal(1.2, 0.3, 0.0, 2.0)  # on the range: accepted, searched on the box
+    laws[names.index("E2C")] = Beta(2.0, 5.0, 1.5, 3.0)
+    out = _small_run().run(StageContext("hm", verbose=True), surrogate=surrogate, observations=bundled,
+                           space=space.assign(marginal_variables(laws)))
+    assert marginals_from_dataset(out, "calibration") == laws
+    assert "AD31 ~ TruncatedNormal(mean=1.2, std=0.3, lower=0, upper=2)" in out.attrs["marginals"].splitlines()
+    assert out.attrs["search_space"].startswith("the space's box [lower, upper], searched uniformly")
+    assert "[hm] searching the box uniformly; the space's laws:" in capsys.readouterr().err
+    x = out["designs"].values
+    assert np.all((x >= lo) & (x <= hi))
+    box = _small_run().run(CTX, surrogate=surrogate, observations=bundled, space=space)
+    assert "uniform on the ranges" in box.attrs["marginals"] and "distribution" not in box
+    np.testing.assert_array_equal(box["designs"].values, x)  # the same search: the laws do not weight it

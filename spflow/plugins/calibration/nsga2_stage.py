@@ -6,7 +6,14 @@ on held-out corefloods (thesis §3.6-3.7, Algorithm 3).
   surrogate's mean, evaluated for a whole generation at once
   (:class:`~spflow.plugins.calibration.nsga2_problem.SurrogateMisfitProblem`).
 * Search space: the ``space`` box (a study's calibrated parameters, or Table 3.2), which must lie inside the
-  surrogate's training box.
+  surrogate's training box. A space that records marginals (``distribution`` / ``distribution_parameters``, e.g.
+  the ``priors`` stage's truncated normals) is searched on the same box, uniformly: the misfits' minima do not depend
+  on a prior, and a search in the marginals' quantile space found the Pareto set worse wherever the data sit in the
+  prior's tail (``benchmarks/bench_nsga2_search_space.py``; docs/calibration.md, "Search space"). Each marginal's
+  support must be its parameter's range, so the search stays inside the supports; a law cut inside the range (a
+  truncated normal or a beta on a sub-range) is refused before any work. The laws are printed (``verbose``) and
+  recorded as ``lhs_design`` and the screening stages record them (attr ``marginals``, the two variables), with
+  attr ``search_space`` saying how they were used.
 * Optimiser: pymoo NSGA-II with the thesis's settings (population 120, tournament of 4, crossover probability 0.8,
   mutation probability 0.01; mapping in :mod:`~spflow.plugins.calibration.nsga2_algorithm`), seeded.
 * Algorithm 3: every ``n_cross`` generations and at the last one the current Pareto set is simulated on the
@@ -38,6 +45,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import sys
+
 import numpy as np
 import xarray as xr
 
@@ -58,6 +67,8 @@ from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.observations import OBSERVATIONS
 from spflow.plugins.surrogates.contract import SURROGATE, load_surrogate
+from spflow.plugins.surrogates.input_marginals import MARGINAL_SCHEMA, marginal_variables
+from spflow.plugins.surrogates.training_data import describe_marginals, space_marginals
 
 if TYPE_CHECKING:
     from spflow.plugins.calibration.nsga2_history import CalibrationHistory
@@ -108,6 +119,7 @@ NSGA2_CALIBRATION = DatasetSchema(
                                             long_name="Pareto point inside the noise-consistent region"),
         "pareto_front_consistent": Variable(("pareto",), kind="b", units="1",
                                             long_name="Pareto point the training data do not reject"),
+        **MARGINAL_SCHEMA,
     },
     attrs=("training", "undetermined", "generations_run", "stop_reason", "confidence_level", "confidence_threshold",
            "confidence_chi2_min", "confidence_n_data", "confidence_noise_model", "confidence_fit_pvalue"),
@@ -117,13 +129,18 @@ NSGA2_CALIBRATION = DatasetSchema(
 _OBJECTIVE_CHOICES = ["recovery", "dp", "oil_cut"]
 #: Share of the prior width a noise-consistent range must cover for its parameter to count as undetermined.
 UNDETERMINED_FRACTION = 0.9
+#: The ``search_space`` attr: how the space's box and marginals enter the search.
+SEARCH_SPACE = ("the space's box [lower, upper], searched uniformly (the marginals' supports; their densities do not "
+                "weight the misfit search, docs/calibration.md 'Search space')")
 #: Goodness-of-fit level below which the noise-consistent ranges carry a warning (chi2 test of the minimum).
 _MISFIT_PVALUE = 0.01
 
 
 class NSGA2Calibration(Stage):
     name = "nsga2_calibration"
-    version = "8"  # 8: every unit in UDUNITS form (issue 23)
+    # 8: the space's marginals checked (supports = the box), printed and recorded (issue #24); every unit in
+    # UDUNITS form (issue 23)
+    version = "8"
     description = "NSGA-II history match on a surrogate (Eqs. 3.16-3.17), cross-validated on held-out corefloods"
     inputs = {"surrogate": SURROGATE, "observations": OBSERVATIONS, "space": SPACE}
     output = NSGA2_CALIBRATION
@@ -203,6 +220,10 @@ class NSGA2Calibration(Stage):
         names = [str(n) for n in space["param"].values]
         mapping = ParameterMap.of(space)
         lower, upper = space["lower"].values.astype(float), space["upper"].values.astype(float)
+        recorded = space_marginals(space, names, lower, upper, f"stage {self.name!r}")  # supports = the box
+        printed, marginals = describe_marginals(names, lower, upper, recorded)
+        if ctx.verbose:
+            print(f"[{ctx.node}] searching the box uniformly; the space's laws{printed}", file=sys.stderr, flush=True)
         for bound in (lower, upper):  # the forward model accepts every point of the box (checked before any work)
             resolve_params(dict(p["fixed"], **mapping.forward_params(bound)))
         problem = SurrogateMisfitProblem(model, observations, names, lower, upper, p["variables"], p["training"])
@@ -218,6 +239,9 @@ class NSGA2Calibration(Stage):
         region = noise.region(problem.mean, lower, upper, history.archive, p["confidence_level"])
         units = [squared_unit(model.outputs.units.get(v, "1") or "1") for v in p["variables"]]
         ds = mapping.attach(self._dataset(history, names, space, units))
+        ds.attrs.update(marginals=marginals, search_space=SEARCH_SPACE)
+        if recorded is not None:
+            ds = ds.assign(marginal_variables(recorded))
         ds = self._add_confidence(ds, region, noise, len(history.archive))
         return self._add_undetermined(self._add_consistent_heldout(ds, noise.chi2(problem.mean(ds["designs"].values)),
                                                                    region))

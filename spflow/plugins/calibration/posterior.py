@@ -20,7 +20,7 @@ import xarray as xr
 from spflow.core.cf_metadata import udunits
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.plugins.design.parameter_map import ParameterMap
-from spflow.plugins.surrogates.input_marginals import DISTRIBUTION_LONG_NAME, PARAMETERS_LONG_NAME
+from spflow.plugins.surrogates.input_marginals import MARGINAL_SCHEMA
 
 __all__ = ["POSTERIOR", "posterior_dataset", "flat_theta", "block_labels"]
 
@@ -38,8 +38,7 @@ POSTERIOR = DatasetSchema(
         "acceptance": Variable(("chain",), units="1", long_name="acceptance fraction of the chain"),
         "lower": Variable(("param",), units_variable="unit", long_name="lower end of the prior's support (Eq. 4.2)"),
         "upper": Variable(("param",), units_variable="unit", long_name="upper end of the prior's support (Eq. 4.2)"),
-        "distribution": Variable(("param",), kind="U", required=False, long_name=DISTRIBUTION_LONG_NAME),
-        "distribution_parameters": Variable(("param",), kind="U", required=False, long_name=PARAMETERS_LONG_NAME),
+        **MARGINAL_SCHEMA,
         "unit": Variable(("param",), kind="U", long_name="UDUNITS unit of each parameter's design column"),
         "block_variable": Variable(("block",), kind="U", long_name="QoI of the block"),
         "block_experiment": Variable(("block",), kind="U", long_name="coreflood of the block"),

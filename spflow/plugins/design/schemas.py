@@ -2,6 +2,7 @@
 
 from spflow.core.schema import DatasetSchema, Variable
 from spflow.plugins.design.parameter_map import NAMES_VAR, SCALE_VAR
+from spflow.plugins.surrogates.input_marginals import MARGINAL_SCHEMA
 
 #: The parameter map of a space or design (:mod:`spflow.plugins.design.parameter_map`): optional, absent = each
 #: column is the UTCHEM name it sets, on a linear scale.
@@ -28,12 +29,13 @@ SPACE = DatasetSchema(
 )
 
 #: Sample points in a parameter space (dims ``sample``, ``param``). With ``unit`` (a design drawn from a space),
-#: ``values`` has units per element; a design without it (hand-made, or from draws) carries no units.
+#: ``values`` has units per element; a design without it (hand-made, or from draws) carries no units. A design drawn
+#: from a space's marginals (``lhs_design``) records them (``distribution`` / ``distribution_parameters``).
 DESIGN = DatasetSchema(
     dims=("sample", "param"),
     variables={"values": Variable(("sample", "param"), units=None, long_name="design points"),
                "unit": Variable(("param",), kind="U", required=False, long_name="UDUNITS unit of each column")}
-    | MAP_VARIABLES,
+    | MAP_VARIABLES | MARGINAL_SCHEMA,
     doc="design points",
 )
 

@@ -14,8 +14,9 @@ exponents of Table 3.2) can be added with explicit ``ranges``.
 ``distribution="truncated_normal"`` each fitted parameter is N(estimate, std²) of its fit truncated to the box (the
 priors "as the lab fit produced them"), recorded in the space's ``distribution`` / ``distribution_parameters``
 variables (:func:`spflow.plugins.surrogates.input_marginals.marginal_variables`); parameters from ``ranges`` stay
-uniform. The surrogate stages fit under these marginals (docs/surrogates.md, Input distributions); the design and
-calibration stages still read only the box. The output is the SPACE dataset of
+uniform. The surrogate stages fit under these marginals (docs/surrogates.md, Input distributions), ``lhs_design``
+and the screening stages draw from them, the MCMC samplers take them as the prior and ``nsga2_calibration`` searches
+their supports, the box (docs/calibration.md, "Search space"). The output is the SPACE dataset of
 :mod:`spflow.plugins.design.schemas` -- the same contract as ``parameter_space`` -- with ``default`` = the lab
 estimate, so it feeds ``lhs_design``, ``sobol_screening``, ``pce``, ``nsga2_calibration`` and the MCMC samplers
 unchanged.

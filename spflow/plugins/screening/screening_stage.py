@@ -41,8 +41,8 @@ from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.stage import Forward
-from spflow.plugins.surrogates.input_marginals import Uniform, marginal_variables
-from spflow.plugins.surrogates.training_data import space_marginals
+from spflow.plugins.surrogates.input_marginals import marginal_variables
+from spflow.plugins.surrogates.training_data import describe_marginals, space_marginals
 
 from .groups import blocks_for, full_design, resolve_groups
 from .qois import QOI_CHOICES, qoi_coords, qoi_matrix
@@ -131,11 +131,9 @@ class ScreeningStage(Stage):
         groups = self._checked_groups(names, mapping)
         lower, upper, default = (space[k].values.astype(float) for k in ("lower", "upper", "default"))
         recorded = space_marginals(space, names, lower, upper, f"stage {self.name!r}")
-        inputs = recorded or [Uniform(lo, hi) for lo, hi in zip(lower, upper)]
-        laws = "\n  ".join(f"{n} ~ {m!r}" for n, m in zip(names, inputs))
+        printed, marginals = describe_marginals(names, lower, upper, recorded)
         if ctx.verbose:
-            note = "" if recorded else " (the space records no marginals: uniform on its ranges)"
-            print(f"[{ctx.node}] screening under{note}:\n  {laws}", file=sys.stderr, flush=True)
+            print(f"[{ctx.node}] screening under{printed}", file=sys.stderr, flush=True)
         blocks = blocks_for(names, groups, self.params["mode"], self._runs)
         streams = [s.spawn(2) for s in np.random.SeedSequence(self.params["seed"]).spawn(len(blocks))]
         samples = [self._sample(b.names, lower[b.columns], upper[b.columns], np.random.default_rng(s[0]),
@@ -178,8 +176,7 @@ class ScreeningStage(Stage):
             "conf_level": self.params["conf_level"],
             "select_on": ", ".join(self.params["select_on"]),
             "selection_rule": self.rule.describe(),
-            "marginals": laws.replace("\n  ", "\n") if recorded else "uniform on the ranges (the space records no "
-                                                                      "marginals)",
+            "marginals": marginals,
             **self._attrs(),
         }
         return out

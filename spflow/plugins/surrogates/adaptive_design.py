@@ -7,7 +7,8 @@ between two iterations is below ``tolerance`` (thesis: Δε_LOO^mean < 5e-4, Alg
 are spent. Each increment is a fresh Latin hypercube (seeded ``seed + iteration``) appended to the earlier points, so
 no simulation is thrown away; the union is no longer a Latin hypercube, only close to one. When the space records
 marginals (:mod:`.training_data`), each column of the hypercube goes through its marginal's quantile function, so the
-design is drawn from them, and the PCE is fitted under them.
+design is drawn from them (the ``lhs_design`` stage's :func:`~spflow.plugins.design.latin_hypercube.latin_hypercube`),
+and the PCE is fitted under them.
 
 The output is the final surrogate (kind ``pce``) plus the history over the design sizes (dim ``n_s``):
 ε_LOO^mean, the mean modified LOO, ε_emp^mean (Eq. 3.10) and the selected degree.
@@ -23,16 +24,16 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 from spflow.core.params import Param
 from spflow.core.stage import Stage, StageContext
+from spflow.plugins.design.latin_hypercube import latin_hypercube
 from spflow.plugins.design.parameter_map import ParameterMap
 from spflow.plugins.design.schemas import SPACE
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.stage import Forward
 
 from .contract import STORED_SURROGATE, with_parameter_units
-from .input_marginals import from_unit_hypercube
 from .pce_model import PCE
 from .pce_stage import PCE_PARAMS, check_lists, fit_options
-from .training_data import space_marginals, training_set
+from .training_data import training_set
 
 __all__ = ["AdaptivePCE"]
 
@@ -75,16 +76,7 @@ class AdaptivePCE(Stage):
         return f"{super().code_fingerprint()}-{Forward.code_fingerprint()}"
 
     def _batch(self, space: xr.Dataset, size: int, iteration: int) -> xr.Dataset:
-        from scipy.stats import qmc
-
-        sampler = qmc.LatinHypercube(d=space.sizes["param"], rng=self.params["seed"] + iteration)
-        unit = sampler.random(size)
-        lower, upper = space["lower"].values, space["upper"].values
-        inputs = space_marginals(space, [str(n) for n in space["param"].values], lower, upper)
-        if inputs is None:
-            values = qmc.scale(unit, lower, upper)
-        else:
-            values = np.clip(from_unit_hypercube(inputs, unit), lower, upper)
+        values, _ = latin_hypercube(space, size, self.params["seed"] + iteration, where=f"stage {self.name!r}")
         return ParameterMap.of(space).design(values)
 
     def run(self, ctx: StageContext, space: xr.Dataset) -> xr.Dataset:

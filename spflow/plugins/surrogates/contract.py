@@ -25,8 +25,8 @@ from spflow.core.cf_metadata import UNITS_VARIABLE
 from spflow.core.plugins import get_registry
 from spflow.core.schema import DatasetSchema, Variable
 
-from .input_marginals import (DISTRIBUTION_LONG_NAME, PARAMETERS_LONG_NAME, Marginal, Uniform, check_support,
-                              marginal_variables, marginals_from_dataset)
+from .input_marginals import (MARGINAL_SCHEMA, Marginal, Uniform, check_support, marginal_variables,
+                              marginals_from_dataset)
 from .orthonormal_polynomials import PolynomialFamily
 from .outputs import OutputIndex
 
@@ -43,8 +43,7 @@ SURROGATE = DatasetSchema(
         # ±inf where a marginal is unbounded (normal, lognormal); a NaN is refused by the kinds' constructors
         "lower": Variable(("param",), units=None, allow_nan=True, long_name="lower end of the input's support"),
         "upper": Variable(("param",), units=None, allow_nan=True, long_name="upper end of the input's support"),
-        "distribution": Variable(("param",), kind="U", required=False, long_name=DISTRIBUTION_LONG_NAME),
-        "distribution_parameters": Variable(("param",), kind="U", required=False, long_name=PARAMETERS_LONG_NAME),
+        **MARGINAL_SCHEMA,
         "output_variable": Variable(("output",), kind="U", long_name="variable of each output column"),
         "output_pv": Variable(("output",), units="1", allow_nan=True,
                               long_name="injected pore volumes of each output column"),

@@ -39,18 +39,24 @@ from typing import ClassVar
 import numpy as np
 
 from spflow.core.errors import ParameterError
+from spflow.core.schema import Variable
 from spflow.plugins.forward.checks import check_number
 
 from .orthonormal_polynomials import HERMITE, LEGENDRE, PolynomialFamily, jacobi, truncated_hermite
 
 __all__ = ["Marginal", "Uniform", "Normal", "LogNormal", "TruncatedNormal", "Beta", "MARGINALS",
            "marginal_from_record", "check_support", "first_outside", "from_unit_hypercube", "marginal_variables",
-           "marginals_from_dataset", "DISTRIBUTION_LONG_NAME", "PARAMETERS_LONG_NAME"]
+           "marginals_from_dataset", "DISTRIBUTION_LONG_NAME", "PARAMETERS_LONG_NAME", "MARGINAL_SCHEMA"]
 
 #: CF long names of the two string variables (along ``param``) that record the marginals in a Dataset.
 DISTRIBUTION_LONG_NAME = "marginal law of the input (uniform, normal, lognormal, truncated_normal, beta)"
 PARAMETERS_LONG_NAME = ("JSON object of the marginal's parameters: mean, std, lower, upper in the input's unit, alpha, "
                         "beta dimensionless, lognormal mu, sigma of ln(x / unit)")
+#: The two variables as optional entries of a Dataset schema (a stored surrogate, a design drawn from marginals).
+MARGINAL_SCHEMA = {
+    "distribution": Variable(("param",), kind="U", required=False, long_name=DISTRIBUTION_LONG_NAME),
+    "distribution_parameters": Variable(("param",), kind="U", required=False, long_name=PARAMETERS_LONG_NAME),
+}
 
 
 def _number(owner: str, field: str, value) -> float:

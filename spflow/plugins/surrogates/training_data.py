@@ -22,10 +22,14 @@ import xarray as xr
 from spflow.core.errors import ParameterError
 from spflow.plugins.forward.failures import drop_failed
 
-from .input_marginals import Marginal, marginals_from_dataset
+from .input_marginals import Marginal, Uniform, marginals_from_dataset
 from .outputs import OutputIndex, stack_outputs
 
-__all__ = ["TrainingSet", "design_points", "training_set", "space_marginals"]
+__all__ = ["TrainingSet", "design_points", "training_set", "space_marginals", "describe_marginals",
+           "UNIFORM_ON_RANGES"]
+
+#: The ``marginals`` attr of a stage that draws from a space recording no marginals.
+UNIFORM_ON_RANGES = "uniform on the ranges (the space records no marginals)"
 
 
 @dataclass(frozen=True)
@@ -86,3 +90,15 @@ def space_marginals(space: xr.Dataset, names: list[str], lower: np.ndarray, uppe
                                  f"a space's marginals must live on its range (uniform, truncated_normal or beta "
                                  f"with lower/upper = the range)")
     return inputs
+
+
+def describe_marginals(names: list[str], lower: np.ndarray, upper: np.ndarray,
+                       recorded: list[Marginal] | None) -> tuple[str, str]:
+    """What a stage that draws from a space says of the laws it drew under (``recorded``: :func:`space_marginals`):
+    (``printed``: ":" then one indented ``name ~ law`` line per parameter, after a note when the space records none
+    and its ranges are taken as uniform; ``attr``: the output's ``marginals`` attr, those lines unindented, or
+    :data:`UNIFORM_ON_RANGES`). A stage prints ``f"[{node}] <what it draws> under{printed}"`` (``verbose``)."""
+    inputs = recorded or [Uniform(lo, hi) for lo, hi in zip(lower, upper)]
+    laws = "\n".join(f"{n} ~ {m!r}" for n, m in zip(names, inputs))
+    note = "" if recorded else " (the space records no marginals: uniform on its ranges)"
+    return f"{note}:\n  " + laws.replace("\n", "\n  "), laws if recorded else UNIFORM_ON_RANGES
