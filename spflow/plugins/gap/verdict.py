@@ -73,7 +73,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
 
 __all__ = ["Rule", "CandidateScore", "significant", "passes", "ambiguity_set", "targeted_pvalue", "verdict",
            "VERDICTS"]
@@ -155,6 +154,8 @@ def targeted_pvalue(chi2_drops: Sequence[float], n_candidates: int) -> float:
     at the data, so the correction counts every candidate). Each ``D_k`` is asymptotically ``chi^2_1`` (a
     strength at the boundary of its range gives the conservative 50:50 mixture of ``chi^2_0`` and ``chi^2_1``)
     under a base model that holds (module docstring, **Gap significance**). 1 when nothing was refitted."""
+    from scipy.stats import chi2  # (the stage table imports Rule from here: ``spflow list`` loads no SciPy)
+
     drops = [d for d in chi2_drops if np.isfinite(d)]
     if not drops or n_candidates < 1:
         return 1.0
