@@ -83,7 +83,8 @@ class ParameterPrior:
     def log_density(self, theta: np.ndarray) -> np.ndarray:
         """log p(θ) of each row of ``theta`` (rows, d): the sum of the marginals' log densities (−inf outside)."""
         theta = np.atleast_2d(theta)
-        out = np.full(theta.shape[0], self._constant)
+        inside = np.all((theta >= self.lower) & (theta <= self.upper), axis=1)
+        out = np.where(inside, self._constant, -np.inf)
         for j, law in self._densities:
             out += law.logpdf(theta[:, j])
         return out
