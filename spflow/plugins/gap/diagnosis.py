@@ -15,11 +15,12 @@
    (:mod:`~spflow.plugins.gap.input_correlation`); the calibration gap is significant when
    ``P(chi^2_{n-p} >= chi^2) < alpha``.
 3. **Which** — projected finite-strength fingerprints of every candidate and their angle matrix
-   (:mod:`~spflow.plugins.gap.fingerprints`), a shortlist, refits of "reference + effect"
+   (:mod:`~spflow.plugins.gap.fingerprints`), a shortlist (in the first step extended in screen order while the
+   gap is significant and no refit passes), refits of "reference + effect"
    (:mod:`~spflow.plugins.gap.candidates`) scored out of sample (held-out experiments, else leave-one-slug-out;
    :mod:`~spflow.plugins.gap.predictive_scores`; PSIS-LOO on the calibration data is reported next to it,
    :mod:`~spflow.plugins.gap.psis_loo`), the decision rule and greedy addition of further effects
-   (:mod:`~spflow.plugins.gap.verdict`).
+   (:mod:`~spflow.plugins.gap.verdict`; the calibration gap is significant on the omnibus or the targeted test).
 4. **How far** — gap closed, RMSE ratios, interval coverage and parameter shifts of the final model against the
    base (:mod:`~spflow.plugins.gap.quantification`).
 """
@@ -490,6 +491,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             w_ref = outs[search.chosen]
 
     final_closed = gap_closed(base_fit.chi2, reference.chi2, dof)
+
     def closes(s: CandidateScore) -> bool:  # (a gap only the targeted test finds has no fraction to close)
         if np.isfinite(s.gap_closed):
             return s.gap_closed >= options.rule.closed_fraction
