@@ -12,8 +12,8 @@
 2. **Where** — whitened residuals per QoI x slug cell, Ljung-Box whiteness, signature predictive checks, ranked gap
    cells (:mod:`~spflow.plugins.gap.localisation`, :mod:`~spflow.plugins.gap.signatures`), mean-shift change points
    inside slugs (:mod:`~spflow.plugins.gap.change_points`) and residual/input cross-correlations
-   (:mod:`~spflow.plugins.gap.input_correlation`); the calibration gap is significant when
-   ``P(chi^2_{n-p} >= chi^2) < alpha``.
+   (:mod:`~spflow.plugins.gap.input_correlation`); the omnibus test of the calibration gap is
+   ``P(chi^2_{n-p} >= chi^2) < alpha`` (the targeted one follows the first refits, step 3).
 3. **Which** — projected finite-strength fingerprints of every candidate and their angle matrix
    (:mod:`~spflow.plugins.gap.fingerprints`), a shortlist (in the first step extended in screen order while the
    gap is significant and no refit passes), refits of "reference + effect"
