@@ -117,6 +117,52 @@ def test_power_of_equal_covariances_is_the_analytic_normal_tail(distance):
     assert m.sd == pytest.approx(distance, rel=1e-12) and m.se == pytest.approx(distance, rel=1e-12)
 
 
+@pytest.mark.parametrize("offsets", [[1.5], [-1.0, 2.5]])
+def test_power_with_truth_offsets_is_the_analytic_normal_tail(offsets):
+    """Data from the truth's forward runs at parameter draws: w = o_j + e, S_a = S_b = I, shift d. Then
+    L = |d|^2 / 2 - d'(o_j + e) ~ N(|d|^2 / 2 - d'o_j, |d|^2) and SE = |d|: the power is the mean over the draws of
+    the normal tails (offsets o_j = c_j d / |d| along the shift, c_j given)."""
+    n, distance = 20, 4.0
+    unit = np.zeros(n)
+    unit[:4] = 0.5
+    d = distance * unit
+    rows = np.array([c * unit for c in offsets])
+    margin = max(4.0, 2.0 * distance)
+    analytic = np.mean([norm.sf((margin - (distance**2 / 2 - c * distance)) / distance) for c in offsets])
+    power, accuracy = decision_power([np.zeros(n), d], [np.eye(n), np.eye(n)], 0, draws=20_000, seed=2,
+                                     truth_offsets=rows)
+    assert 0.05 < analytic < 0.95
+    assert abs(power[1] - analytic) < 4 * math.sqrt(analytic * (1 - analytic) / 20_000)
+    assert accuracy == power[1]
+
+
+def test_dispersion_corrected_power_matches_a_brute_force_simulation_of_the_rule():
+    """The rule with the diagnosis's over-dispersion correction (SE x sqrt(max(1, phi_a, phi_b)), phi_m the mean
+    square of w - d_m) on data from truth draws, against an independent simulation with scipy's log densities."""
+    noise, a, b = _linear_gaussian_pair()
+    shift, sa, sb = _whitened(noise, a, b)
+    n = shift.size
+    offsets = np.random.default_rng(7).normal(0.0, 1.2, size=(5, n))
+    kw = dict(min_delta=4.0, se_factor=2.0, draws=20_000, seed=4, truth_offsets=offsets)
+    plain, _ = decision_power([np.zeros(n), shift], [sa, sb], 0, **kw)
+    power, _ = decision_power([np.zeros(n), shift], [sa, sb], 0, dispersion=True, **kw)
+    rng = np.random.default_rng(13)
+    w = offsets[rng.integers(0, 5, 40_000)] + rng.standard_normal((40_000, n))
+    ratio = multivariate_normal(np.zeros(n), sa).logpdf(w) - multivariate_normal(shift, sb).logpdf(w)
+    se = np.linalg.norm(w @ np.linalg.inv(sa) - (w - shift) @ np.linalg.inv(sb), axis=1)
+    phi = np.maximum(np.maximum((w**2).mean(axis=1), ((w - shift) ** 2).mean(axis=1)), 1.0)
+    for got, inflation in ((plain, 1.0), (power, np.sqrt(phi))):
+        reference = np.mean((ratio > 4.0) & (ratio > 2.0 * se * inflation))
+        assert 0.05 < reference < 0.95
+        assert abs(got[1] - reference) < 4 * math.sqrt(reference * (1 - reference) * (1 / 20_000 + 1 / 40_000))
+    assert power[1] < plain[1] - 0.05  # the correction matters on these data
+
+
+def test_truth_offsets_of_the_wrong_shape_are_rejected():
+    with pytest.raises(ParameterError, match="truth_offsets"):
+        decision_power([np.zeros(3), np.ones(3)], [np.eye(3)] * 2, 0, draws=100, truth_offsets=np.zeros((2, 4)))
+
+
 # -- design space -------------------------------------------------------------------------------------------------
 
 _TOY = {"name": "toy", "slugs": [{"name": "W", "pv": 0.3, "salinity_ppm": 9400},
@@ -211,10 +257,10 @@ def test_monte_carlo_parameter_spread_keeps_the_ranking(toy):
     exp, fits, _, _, bases = toy
     designs = design_space(exp.schedule, 0.25, kinds=["repeat", "rate_step"])
     table = rank_designs(hypotheses_from_fits(fits, bases=bases), bases["viscosity"], exp, designs, draws=1000,
-                         parameter_draws=12)
+                         parameter_draws=12, truth_draws=12)
     assert list(table["kind"].values[:-1]) == ["rate_step"] * (len(designs) - 1)
     assert table.attrs["parameter_uncertainty_method"] == "Monte Carlo over 12 parameter draws"
-    # forward runs: per hypothesis and design, the fit plus 12 draws
+    # forward runs: per hypothesis and design, the fit plus 12 draws (the truth's data reuse the spread's draws)
     assert table.attrs["forward_runs"] == 2 * len(designs) * 13
 
 
