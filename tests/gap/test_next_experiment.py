@@ -299,6 +299,22 @@ def test_ranked_table_schema(toy):
     assert table.attrs["base_rate_ml_min"] == 0.25 and table.attrs["noise_model_source"] == "reference data"
 
 
+def test_truth_dispersion_of_a_repeat_is_bounded_by_the_calibrated_parameters(toy):
+    """On a replicate of the calibration flood the truth's parameter draws move its whitened prediction by
+    ``A dz`` with ``E||A dz||^2 = tr(J_w C J_w') = sum_i l_i / (l_i + 1/tau^2) < q`` (``l_i`` the eigenvalues of
+    ``J_w' J_w``, ``q`` the calibrated parameters): ``truth_dispersion - 1`` is at most about ``q / n``."""
+    _, fits, _, table, _ = toy
+    repeat = table.isel(design=list(table["kind"].values).index("repeat"))
+    n = int(repeat["n_points"])
+    assert table["truth_dispersion"].attrs["units"] == "1"
+    for name, f in fits.items():
+        lam = np.linalg.eigvalsh(f.jacobian.T @ f.jacobian)
+        bound = float(np.sum(lam / (lam + 1 / 0.5**2)))
+        assert bound < f.z.size
+        assert 1.0 + 0.1 * bound / n <= float(repeat["truth_dispersion"].sel(truth=name)) <= 1.0 + 3.0 * bound / n
+    assert table.attrs["truth_draws"] == 20 and table.attrs["dispersion_correction"] == 1
+
+
 def test_proposal_files_round_trip(toy, tmp_path):
     _, _, _, table, _ = toy
     paths = write_proposal(table, tmp_path / "next")
