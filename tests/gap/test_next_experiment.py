@@ -26,6 +26,7 @@ from spflow.plugins.gap.design_check import realised_accuracy
 from spflow.plugins.gap.design_space import DESIGN_KINDS, design_space
 from spflow.plugins.gap.layout import make_layout
 from spflow.plugins.gap.least_squares import fit
+from spflow.plugins.gap.numerical_error import DEFAULT_VARIANTS, NumericalTerm
 from spflow.plugins.gap.next_experiment import (Hypothesis, decision_power, hypotheses_from_fits, log_ratio_moments,
                                                 rank_designs)
 from spflow.plugins.gap.observed import load_experiments
@@ -264,6 +265,32 @@ def test_monte_carlo_parameter_spread_keeps_the_ranking(toy):
     assert table.attrs["forward_runs"] == 2 * len(designs) * 13
 
 
+def test_numerical_error_term_on_the_designs(toy):
+    """The diagnosis's numerical-error term in the designer's error model: at scale 0 the ranking is the one
+    without it; at a scale that makes the numerics dominate, the designs separate less; its runs are counted (per
+    design, the base point at its own numerics and at each alternative)."""
+    exp, fits, _, _, bases = toy
+    hypotheses = hypotheses_from_fits(fits, bases=bases)
+    designs = design_space(exp.schedule, 0.25, kinds=["repeat", "rate_step"])[:3]
+    base = bases["viscosity"]
+    base_fit = fits["viscosity"]
+    plain = rank_designs(hypotheses, base, exp, designs, draws=500, truth_draws=5)
+    zero = rank_designs(hypotheses, base, exp, designs, draws=500, truth_draws=5,
+                        numerical=NumericalTerm(base_fit, DEFAULT_VARIANTS, 0.0))
+    assert np.array_equal(plain["accuracy"].values, zero["accuracy"].values)
+    assert zero.attrs["numerical_error"] == "none" and zero.attrs["forward_runs"] == plain.attrs["forward_runs"]
+    big = rank_designs(hypotheses, base, exp, designs, draws=500, truth_draws=5,
+                       numerical=NumericalTerm(base_fit, DEFAULT_VARIANTS, 30.0))
+    assert big.attrs["numerical_error"].startswith("the diagnosis's numerical-error term, scale 30")
+    assert big.attrs["forward_runs"] == plain.attrs["forward_runs"] + len(designs) * (1 + len(DEFAULT_VARIANTS))
+    by_label = {str(x): i for i, x in enumerate(plain["label"].values)}
+    for j, label in enumerate(big["label"].values):
+        i = by_label[str(label)]
+        assert float(big["worst_expected_log_ratio"][j]) < float(plain["worst_expected_log_ratio"][i])
+    with pytest.raises(ParameterError, match="numerical.scale"):
+        rank_designs(hypotheses, base, exp, designs, numerical=NumericalTerm(base_fit, DEFAULT_VARIANTS, -1.0))
+
+
 def test_predicted_accuracy_holds_on_simulated_lab_corefloods(toy):
     """End to end: lab-like corefloods of the design (make_coreflood: the measurement chain's own random errors),
     scored by the diagnosis's held-out predictive densities and decision rule."""
@@ -403,7 +430,8 @@ def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
     # the toy's hypotheses differ by their base model (the diagnosis's by their candidate effect): pass the bases
     monkeypatch.setattr(nad, "hypotheses_from_fits", lambda f: hypotheses_from_fits(f, bases=bases))
     diag = SimpleNamespace(ambiguity=["shear_thinning", "viscosity"], steps=[SimpleNamespace(fits=fits)],
-                           calibration=[exp], base=bases["viscosity"], options=Options(variables=("dp", "oil_cut")))
+                           calibration=[exp], base=bases["viscosity"], options=Options(variables=("dp", "oil_cut")),
+                           base_fit=fits["viscosity"], numerical_scale=None)  # (no numerical-error term)
     proposal = nad.propose_next_experiment(diag, tmp_path)
     assert proposal.summary["kind"] == "rate_step" and proposal.summary["worst_accuracy"] > 0.95
     assert read_schedule_file(proposal.files["schedule"]) == as_schedule(proposal.summary["schedule"])

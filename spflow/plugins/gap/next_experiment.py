@@ -52,10 +52,17 @@ where the calibration constrains the truth). ``truth_draws = 0`` draws ``w ~ N(0
 
 **Over-dispersion** (``dispersion``, default on): the rule applied is the diagnosis's, whose SE is multiplied by
 ``sqrt(max(1, phi_a, phi_b))``, ``phi_m`` the mean square of model ``m``'s plain whitened residuals ``w - d_m`` on
-the flood (:mod:`~spflow.plugins.gap.verdict`). Not simulated: the held-out coreflood the diagnosis already has
-(scored together with the new one), the numerical-error term of its covariance, the generic-discrepancy competitor,
-the base model as a competitor and the recalibration when the flood joins the calibration data
-(docs/next_experiment.md, "Where it is blind").
+the flood (:mod:`~spflow.plugins.gap.verdict`).
+
+**Numerical error** (``numerical``, a :class:`~spflow.plugins.gap.numerical_error.NumericalTerm`): the diagnosis's
+error model holds the simulator's own numerical error, scaled by ``s`` (:mod:`~spflow.plugins.gap.numerical_error`);
+on a design the spread of the base model's predictions over the alternative numerics is measured at the
+calibrated base point and added to ``W_a`` the same way (a regime change that the numerics resolve differently
+separates nothing then).
+
+Not simulated: the held-out coreflood the diagnosis already has (scored together with the new one), the
+generic-discrepancy competitor, the base model as a competitor and the recalibration when the flood joins the
+calibration data (docs/next_experiment.md, "Where it is blind").
 
 Designs are ranked (``criterion``) by their worst hypothesis (maximin): the smallest decision accuracy over the
 hypotheses (``"accuracy"``), by the accuracy averaged over equally likely hypotheses (``"mean_accuracy"``), or by
@@ -76,7 +83,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import xarray as xr
 
-from spflow.core.errors import ParameterError
+from spflow.core.errors import ParameterError, SpflowError
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.run_arguments import output_grid
@@ -86,6 +93,7 @@ from .base_model import BaseModel
 from .design_space import Design, design_space
 from .layout import make_layout
 from .least_squares import Fit, model_point
+from .numerical_error import NumericalTerm, inflate
 from .observed import Experiment
 from .prediction import Predictor
 from .quantification import parameter_covariance, raw_jacobian
@@ -268,7 +276,8 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                  designs: Sequence[Design] | None = None, *, variables: Sequence[str] = ("dp", "oil_cut"),
                  min_delta: float = 4.0, se_factor: float = 2.0, criterion: str = "accuracy", draws: int = 4000,
                  seed: int = 0, parameter_draws: int = 0, truth_draws: int = 20, dispersion: bool = True,
-                 diff_step: float = 0.01, parallel=None, log: Callable[[str], None] | None = None) -> xr.Dataset:
+                 numerical: NumericalTerm | None = None, diff_step: float = 0.01, parallel=None,
+                 log: Callable[[str], None] | None = None) -> xr.Dataset:
     """Rank ``designs`` (default: :func:`design_space` of the reference schedule at its rate) by how well they
     separate ``hypotheses`` (at least two, distinct names), each a calibrated point of ``base`` (or of its own
     ``Hypothesis.base``), on a coreflood with
@@ -290,6 +299,9 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                              f"linearised predictive distribution), got {truth_draws!r}")
     if criterion not in CRITERIA:
         raise ParameterError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+    if numerical is not None and not (math.isfinite(numerical.scale) and numerical.scale >= 0.0):
+        raise ParameterError(f"numerical.scale must be finite and >= 0 (the numerical-error term's scale), got "
+                             f"{numerical.scale!r}")
     unmeasured = sorted(set(variables) - set(reference.observed))
     if not variables or unmeasured:
         raise ParameterError(f"variables {unmeasured or list(variables)} are not measured in the reference coreflood "
@@ -315,12 +327,22 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
     where = np.full((nd, k, k), None, dtype=object)
     failed = np.zeros(nd, int)
     points = np.zeros(nd, int)
+    numerical_runs = 0
     for i, (design, exp) in enumerate(zip(designs, exps)):
         say(f"design {i + 1}/{nd}: {design.label}")
         preds = [p.predict([h.fit.point], [exp.name], list(variables))[0] for p, h in zip(predictors, hypotheses)]
         if any(p is None for p in preds):
             failed[i] = sum(p is None for p in preds)
             continue
+        numerics = None
+        if numerical is not None and numerical.scale > 0.0:
+            own = Predictor(base, [exp], parallel)
+            try:  # the diagnosis's numerical-error term on this design (its base model at other numerics)
+                term = numerical.spread(own)
+            except SpflowError:
+                failed[i] = k
+                continue
+            numerics, numerical_runs = term.series, numerical_runs + term.runs + own.runs
         series = [p[exp.name] for p in preds]
         common = {v: np.all([np.isfinite(s[v]) for s in series], axis=0) for v in variables}
         for a in range(k):
@@ -328,6 +350,8 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
             # hypothesis is compared on the points all of them predict
             observed = {v: np.where(common[v], series[a][v], np.nan) for v in variables}
             layout = make_layout([replace(exp, observed=observed)], list(variables))
+            if numerics is not None:
+                layout = inflate(layout, numerics, numerical.scale)
             points[i] = layout.size
             mu_a = layout.observed()
             shifts, covs = [], []
@@ -443,7 +467,10 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
             "truth_data": (f"the truth's forward runs at {truth_draws} parameter draws from its calibration "
                            "covariance plus measurement noise" if truth_draws else
                            "the truth's linearised predictive distribution"),
-            "forward_runs": int(sum(p.runs for p in predictors)),
+            "forward_runs": int(sum(p.runs for p in predictors)) + numerical_runs,
+            "numerical_error": (f"the diagnosis's numerical-error term, scale {numerical.scale:.3g}, spread over "
+                                f"{len(numerical.variants)} alternative numerics at the calibrated base point"
+                                if numerical is not None and numerical.scale > 0.0 else "none"),
             "method": "Gaussian predictive distributions under the diagnosis's error model with linearised "
                       "parameter uncertainty; expected log ratio = KL divergence; power and accuracy simulated with "
                       "the decision rule (spflow.plugins.gap.next_experiment)",
