@@ -301,8 +301,8 @@ def added_coreflood(base: BaseModel, truth: dict, schedule, seed: int, cells: in
 def _proposal_fields(proposal) -> dict:
     s = proposal.summary
     return {**{k: s[k] for k in ("label", "kind", "hypotheses", "total_pv", "duration_h", "worst_accuracy",
-                                 "mean_accuracy", "accuracy", "worst_expected_log_ratio_nat", "pairs",
-                                 "schedule")},
+                                 "mean_accuracy", "accuracy", "truth_dispersion", "worst_expected_log_ratio_nat",
+                                 "pairs", "schedule")},
             "runners_up": [r["label"] for r in s["runners_up"]],
             "forward_runs": int(proposal.table.attrs["forward_runs"])}
 

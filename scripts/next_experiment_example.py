@@ -53,6 +53,11 @@ def main(argv=None) -> int:
     ap.add_argument("--chase-pv", type=float, default=0.3)
     ap.add_argument("--nested", action="store_true")
     ap.add_argument("--parameter-draws", type=int, default=0, help="0: linearised parameter uncertainty")
+    ap.add_argument("--truth-draws", type=int, default=20,
+                    help="the truth's forward runs at parameter draws that make the simulated lab data (0: data from "
+                         "its linearised predictive distribution, the method before 2026-11-27)")
+    ap.add_argument("--no-dispersion", action="store_true",
+                    help="the decision rule without the diagnosis's over-dispersion correction of the SE")
     ap.add_argument("--check-ranks", default="", metavar="R1,R2,...",
                     help="designs whose predicted accuracy to check on simulated lab corefloods")
     ap.add_argument("--seeds", type=int, default=30, help="simulated corefloods per hypothesis for --check-ranks")
@@ -85,7 +90,8 @@ def main(argv=None) -> int:
         extra = "".join(f", {k} = {v:.3g}" for k, v in f.strengths.items())
         print(f"{name}: chi2 = {f.chi2:.1f} on {dof} dof ({values}{extra})")
     hypotheses = hypotheses_from_fits(fits, bases=bases)
-    table = rank_designs(hypotheses, without, exp, parameter_draws=args.parameter_draws)
+    table = rank_designs(hypotheses, without, exp, parameter_draws=args.parameter_draws, truth_draws=args.truth_draws,
+                         dispersion=not args.no_dispersion)
     names = list(table["truth"].values)
     print(f"\n{'rank':>4} {'worst acc.':>10} {'accuracy':>16} {'E[log ratio] (nat)':>22} {'h':>5}  design")
     for i in range(table.sizes["design"]):
@@ -107,7 +113,8 @@ def main(argv=None) -> int:
     table.to_netcdf(out / "next_experiment.nc")
     print(f"\naccuracy and log ratios per hypothesis: {' / '.join(names)} (truth first)")
     for rank in [int(r) for r in args.check_ranks.split(",") if r.strip()]:
-        realised = realised_accuracy(table, hypotheses, without, exp, rank, seeds=args.seeds)
+        realised = realised_accuracy(table, hypotheses, without, exp, rank, seeds=args.seeds,
+                                     dispersion=not args.no_dispersion)
         predicted = table["accuracy"].values[rank - 1]
         print(f"design {rank}: predicted accuracy {' / '.join(f'{x:.2f}' for x in predicted)}, realised on "
               f"{args.seeds} simulated corefloods {' / '.join(f'{x:.2f}' for x in realised.values)}")

@@ -26,6 +26,7 @@ from spflow.plugins.gap.design_check import realised_accuracy
 from spflow.plugins.gap.design_space import DESIGN_KINDS, design_space
 from spflow.plugins.gap.layout import make_layout
 from spflow.plugins.gap.least_squares import fit
+from spflow.plugins.gap.numerical_error import DEFAULT_VARIANTS, NumericalTerm
 from spflow.plugins.gap.next_experiment import (Hypothesis, decision_power, hypotheses_from_fits, log_ratio_moments,
                                                 rank_designs)
 from spflow.plugins.gap.observed import load_experiments
@@ -115,6 +116,52 @@ def test_power_of_equal_covariances_is_the_analytic_normal_tail(distance):
     m = log_ratio_moments(d, np.eye(30), np.eye(30))
     assert m.expected == pytest.approx(distance**2 / 2, rel=1e-12)
     assert m.sd == pytest.approx(distance, rel=1e-12) and m.se == pytest.approx(distance, rel=1e-12)
+
+
+@pytest.mark.parametrize("offsets", [[1.5], [-1.0, 2.5]])
+def test_power_with_truth_offsets_is_the_analytic_normal_tail(offsets):
+    """Data from the truth's forward runs at parameter draws: w = o_j + e, S_a = S_b = I, shift d. Then
+    L = |d|^2 / 2 - d'(o_j + e) ~ N(|d|^2 / 2 - d'o_j, |d|^2) and SE = |d|: the power is the mean over the draws of
+    the normal tails (offsets o_j = c_j d / |d| along the shift, c_j given)."""
+    n, distance = 20, 4.0
+    unit = np.zeros(n)
+    unit[:4] = 0.5
+    d = distance * unit
+    rows = np.array([c * unit for c in offsets])
+    margin = max(4.0, 2.0 * distance)
+    analytic = np.mean([norm.sf((margin - (distance**2 / 2 - c * distance)) / distance) for c in offsets])
+    power, accuracy = decision_power([np.zeros(n), d], [np.eye(n), np.eye(n)], 0, draws=20_000, seed=2,
+                                     truth_offsets=rows)
+    assert 0.05 < analytic < 0.95
+    assert abs(power[1] - analytic) < 4 * math.sqrt(analytic * (1 - analytic) / 20_000)
+    assert accuracy == power[1]
+
+
+def test_dispersion_corrected_power_matches_a_brute_force_simulation_of_the_rule():
+    """The rule with the diagnosis's over-dispersion correction (SE x sqrt(max(1, phi_a, phi_b)), phi_m the mean
+    square of w - d_m) on data from truth draws, against an independent simulation with scipy's log densities."""
+    noise, a, b = _linear_gaussian_pair()
+    shift, sa, sb = _whitened(noise, a, b)
+    n = shift.size
+    offsets = np.random.default_rng(7).normal(0.0, 1.2, size=(5, n))
+    kw = dict(min_delta=4.0, se_factor=2.0, draws=20_000, seed=4, truth_offsets=offsets)
+    plain, _ = decision_power([np.zeros(n), shift], [sa, sb], 0, **kw)
+    power, _ = decision_power([np.zeros(n), shift], [sa, sb], 0, dispersion=True, **kw)
+    rng = np.random.default_rng(13)
+    w = offsets[rng.integers(0, 5, 40_000)] + rng.standard_normal((40_000, n))
+    ratio = multivariate_normal(np.zeros(n), sa).logpdf(w) - multivariate_normal(shift, sb).logpdf(w)
+    se = np.linalg.norm(w @ np.linalg.inv(sa) - (w - shift) @ np.linalg.inv(sb), axis=1)
+    phi = np.maximum(np.maximum((w**2).mean(axis=1), ((w - shift) ** 2).mean(axis=1)), 1.0)
+    for got, inflation in ((plain, 1.0), (power, np.sqrt(phi))):
+        reference = np.mean((ratio > 4.0) & (ratio > 2.0 * se * inflation))
+        assert 0.05 < reference < 0.95
+        assert abs(got[1] - reference) < 4 * math.sqrt(reference * (1 - reference) * (1 / 20_000 + 1 / 40_000))
+    assert power[1] < plain[1] - 0.05  # the correction matters on these data
+
+
+def test_truth_offsets_of_the_wrong_shape_are_rejected():
+    with pytest.raises(ParameterError, match="truth_offsets"):
+        decision_power([np.zeros(3), np.ones(3)], [np.eye(3)] * 2, 0, draws=100, truth_offsets=np.zeros((2, 4)))
 
 
 # -- design space -------------------------------------------------------------------------------------------------
@@ -211,11 +258,37 @@ def test_monte_carlo_parameter_spread_keeps_the_ranking(toy):
     exp, fits, _, _, bases = toy
     designs = design_space(exp.schedule, 0.25, kinds=["repeat", "rate_step"])
     table = rank_designs(hypotheses_from_fits(fits, bases=bases), bases["viscosity"], exp, designs, draws=1000,
-                         parameter_draws=12)
+                         parameter_draws=12, truth_draws=12)
     assert list(table["kind"].values[:-1]) == ["rate_step"] * (len(designs) - 1)
     assert table.attrs["parameter_uncertainty_method"] == "Monte Carlo over 12 parameter draws"
-    # forward runs: per hypothesis and design, the fit plus 12 draws
+    # forward runs: per hypothesis and design, the fit plus 12 draws (the truth's data reuse the spread's draws)
     assert table.attrs["forward_runs"] == 2 * len(designs) * 13
+
+
+def test_numerical_error_term_on_the_designs(toy):
+    """The diagnosis's numerical-error term in the designer's error model: at scale 0 the ranking is the one
+    without it; at a scale that makes the numerics dominate, the designs separate less; its runs are counted (per
+    design, the base point at its own numerics and at each alternative)."""
+    exp, fits, _, _, bases = toy
+    hypotheses = hypotheses_from_fits(fits, bases=bases)
+    designs = design_space(exp.schedule, 0.25, kinds=["repeat", "rate_step"])[:3]
+    base = bases["viscosity"]
+    base_fit = fits["viscosity"]
+    plain = rank_designs(hypotheses, base, exp, designs, draws=500, truth_draws=5)
+    zero = rank_designs(hypotheses, base, exp, designs, draws=500, truth_draws=5,
+                        numerical=NumericalTerm(base_fit, DEFAULT_VARIANTS, 0.0))
+    assert np.array_equal(plain["accuracy"].values, zero["accuracy"].values)
+    assert zero.attrs["numerical_error"] == "none" and zero.attrs["forward_runs"] == plain.attrs["forward_runs"]
+    big = rank_designs(hypotheses, base, exp, designs, draws=500, truth_draws=5,
+                       numerical=NumericalTerm(base_fit, DEFAULT_VARIANTS, 30.0))
+    assert big.attrs["numerical_error"].startswith("the diagnosis's numerical-error term, scale 30")
+    assert big.attrs["forward_runs"] == plain.attrs["forward_runs"] + len(designs) * (1 + len(DEFAULT_VARIANTS))
+    by_label = {str(x): i for i, x in enumerate(plain["label"].values)}
+    for j, label in enumerate(big["label"].values):
+        i = by_label[str(label)]
+        assert float(big["worst_expected_log_ratio"][j]) < float(plain["worst_expected_log_ratio"][i])
+    with pytest.raises(ParameterError, match="numerical.scale"):
+        rank_designs(hypotheses, base, exp, designs, numerical=NumericalTerm(base_fit, DEFAULT_VARIANTS, -1.0))
 
 
 def test_predicted_accuracy_holds_on_simulated_lab_corefloods(toy):
@@ -253,6 +326,22 @@ def test_ranked_table_schema(toy):
     exp = toy[0]
     assert float(repeat["duration"]) == pytest.approx(1.8 * exp.pore_volume_ml / 0.25 / 60.0, rel=1e-12)
     assert table.attrs["base_rate_ml_min"] == 0.25 and table.attrs["noise_model_source"] == "reference data"
+
+
+def test_truth_dispersion_of_a_repeat_is_bounded_by_the_calibrated_parameters(toy):
+    """On a replicate of the calibration flood the truth's parameter draws move its whitened prediction by
+    ``A dz`` with ``E||A dz||^2 = tr(J_w C J_w') = sum_i l_i / (l_i + 1/tau^2) < q`` (``l_i`` the eigenvalues of
+    ``J_w' J_w``, ``q`` the calibrated parameters): ``truth_dispersion - 1`` is at most about ``q / n``."""
+    _, fits, _, table, _ = toy
+    repeat = table.isel(design=list(table["kind"].values).index("repeat"))
+    n = int(repeat["n_points"])
+    assert table["truth_dispersion"].attrs["units"] == "1"
+    for name, f in fits.items():
+        lam = np.linalg.eigvalsh(f.jacobian.T @ f.jacobian)
+        bound = float(np.sum(lam / (lam + 1 / 0.5**2)))
+        assert bound < f.z.size
+        assert 1.0 + 0.1 * bound / n <= float(repeat["truth_dispersion"].sel(truth=name)) <= 1.0 + 3.0 * bound / n
+    assert table.attrs["truth_draws"] == 20 and table.attrs["dispersion_correction"] == 1
 
 
 def test_proposal_files_round_trip(toy, tmp_path):
@@ -343,7 +432,8 @@ def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
     # the toy's hypotheses differ by their base model (the diagnosis's by their candidate effect): pass the bases
     monkeypatch.setattr(nad, "hypotheses_from_fits", lambda f: hypotheses_from_fits(f, bases=bases))
     diag = SimpleNamespace(ambiguity=["shear_thinning", "viscosity"], steps=[SimpleNamespace(fits=fits)],
-                           calibration=[exp], base=bases["viscosity"], options=Options(variables=("dp", "oil_cut")))
+                           calibration=[exp], base=bases["viscosity"], options=Options(variables=("dp", "oil_cut")),
+                           base_fit=fits["viscosity"], numerical_scale=None)  # (no numerical-error term)
     proposal = nad.propose_next_experiment(diag, tmp_path)
     assert proposal.summary["kind"] == "rate_step" and proposal.summary["worst_accuracy"] > 0.95
     assert read_schedule_file(proposal.files["schedule"]) == as_schedule(proposal.summary["schedule"])

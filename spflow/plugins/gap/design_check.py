@@ -7,7 +7,9 @@ each (:func:`spflow.synthetic.make_coreflood`: the reference's core and measurem
 included -- the transducer's AR(1) noise at its own sampling, uniform tube-reading errors, offset, drift and dead
 volume), reads it back as the diagnosis does (:func:`~spflow.plugins.gap.observed.load_experiments`), scores every
 hypothesis on it as held-out data (:func:`~spflow.plugins.gap.predictive_scores.predictive`) and applies the
-decision rule to the truth against each alternative (``dELPD > min_delta`` and ``> se_factor`` measurement SE).
+decision rule to the truth against each alternative (``dELPD > min_delta`` and ``> se_factor`` measurement SE, the SE
+times ``sqrt(max(1, phi_truth, phi_alternative))`` with the diagnosis's over-dispersion correction, ``phi`` a model's
+mean square whitened residual on the flood; :mod:`~spflow.plugins.gap.verdict`).
 The fraction of seeds where the truth passes against every alternative is its realised accuracy. Nothing here is
 Gaussian or linearised except the predictive densities the diagnosis itself uses, so a design whose predicted and
 realised accuracies disagree shows where the designer's approximations fail.
@@ -32,18 +34,19 @@ from .next_experiment import Hypothesis
 from .observed import Experiment, load_experiments
 from .prediction import Predictor
 from .predictive_scores import compare, predictive
+from .verdict import Rule, significant
 
 __all__ = ["realised_accuracy"]
 
 
 def realised_accuracy(table: xr.Dataset, hypotheses: Sequence[Hypothesis], base: BaseModel, reference: Experiment,
                       rank: int = 1, *, seeds: int = 20, tau: float = 0.5, first_seed: int = 0,
-                      diff_step: float = 0.01) -> xr.DataArray:
+                      diff_step: float = 0.01, dispersion: bool = True) -> xr.DataArray:
     """Realised decision accuracy (dims ``truth``, units 1) of the design ranked ``rank`` in ``table`` (from
     :func:`~spflow.plugins.gap.next_experiment.rank_designs` with the same ``hypotheses``, ``base`` and
     ``reference``) over ``seeds`` simulated corefloods per true hypothesis (module docstring). ``tau`` must be the
-    prior scale of the hypotheses' covariances (:func:`~spflow.plugins.gap.next_experiment.hypotheses_from_fits`).
-    """
+    prior scale of the hypotheses' covariances (:func:`~spflow.plugins.gap.next_experiment.hypotheses_from_fits`);
+    ``dispersion`` applies the over-dispersion correction of the SE (module docstring)."""
     names = [h.name for h in hypotheses]
     if names != [str(x) for x in table["truth"].values]:
         raise ParameterError(f"hypotheses {names} are not those of the table {list(table['truth'].values)}")
@@ -55,7 +58,7 @@ def realised_accuracy(table: xr.Dataset, hypotheses: Sequence[Hypothesis], base:
     row = table.isel(design=int(np.flatnonzero(ranks == rank)[0]))
     schedule = as_schedule(json.loads(str(row["schedule"].values)))
     variables = json.loads(table.attrs["variables"])
-    min_delta, se_factor = float(table.attrs["min_delta"]), float(table.attrs["se_factor"])
+    rule = Rule(min_delta=float(table.attrs["min_delta"]), se_factor=float(table.attrs["se_factor"]))
     passes = np.zeros(len(hypotheses), int)
     for a, truth in enumerate(hypotheses):
         own = truth.base or base
@@ -69,11 +72,12 @@ def realised_accuracy(table: xr.Dataset, hypotheses: Sequence[Hypothesis], base:
             [exp] = load_experiments([lab], reference.pv_step)
             layout = make_layout([exp], variables)
             scores = [predictive(Predictor(h.base or base, [exp]), layout, h.fit, tau, diff_step) for h in hypotheses]
+            phi = [float(np.nanmean(x.whitened**2)) if dispersion else 1.0 for x in scores]
             passed = True
             for b in range(len(hypotheses)):
                 if b != a:
                     delta, se, _ = compare(scores[a], scores[b])
-                    passed &= bool(delta > min_delta and delta > se_factor * se)
+                    passed &= significant(delta, se, max(phi[a], phi[b]), rule)
             passes[a] += passed
     return xr.DataArray(passes / seeds, dims=("truth",), coords={"truth": names},
                         attrs={"units": "1", "long_name": f"realised decision accuracy over {seeds} simulated "

@@ -3,8 +3,9 @@ tell apart, rank lab-runnable corefloods by how well they would separate them an
 
 The competing hypotheses are the diagnosis's own refits of the members of its final ambiguity set (the last step
 that refitted them: "reference + effect", each with the linearised covariance of its calibration); the reference
-coreflood, whose core, rate and measurement chain the new coreflood keeps, is the first calibration coreflood. The
-ranking is :func:`~spflow.plugins.gap.next_experiment.rank_designs` over
+coreflood, whose core, rate and measurement chain the new coreflood keeps, is the first calibration coreflood; the
+diagnosis's numerical-error term (its estimated scale, at the calibrated base point) is in the designer's error model
+as in the diagnosis's. The ranking is :func:`~spflow.plugins.gap.next_experiment.rank_designs` over
 :func:`~spflow.plugins.gap.design_space.design_space` (slug sizes and concentrations, a salinity change, a long
 post-flush, per-slug injection-rate steps); ``docs/next_experiment.md`` has the method.
 """
@@ -20,6 +21,7 @@ from spflow.study.proposed_experiment import study_experiment_toml
 
 from .diagnosis import GapDiagnosis
 from .next_experiment import hypotheses_from_fits, rank_designs
+from .numerical_error import NumericalTerm
 from .proposal import proposal_summary, write_proposal
 
 __all__ = ["NextExperiment", "competing_fits", "propose_next_experiment"]
@@ -69,9 +71,12 @@ def propose_next_experiment(diag: GapDiagnosis, directory, *, parallel=None, log
         return None
     reference = diag.calibration[0]
     variables = [v for v in diag.options.variables if v in reference.observed]
+    scale = diag.numerical_scale.estimate if diag.numerical_scale is not None else 0.0
+    numerical = (NumericalTerm(diag.base_fit, tuple(diag.options.numerical_variants), scale,
+                               diag.options.numerical_window) if scale > 0.0 else None)
     table = rank_designs(hypotheses_from_fits(fits), diag.base, reference, variables=variables,
                          min_delta=diag.options.rule.min_delta, se_factor=diag.options.rule.se_factor,
-                         parallel=parallel, log=log)
+                         numerical=numerical, parallel=parallel, log=log)
     files = write_proposal(table, directory)
     text, _ = study_experiment_toml("next_experiment", files["schedule"].name, reference.core,
                                     reference.measurement, reference.name)

@@ -39,6 +39,31 @@ pair at 0.92 where simulation gives 0.99), the **predicted power** ``P(a preferr
 closed-form margin ``max(min_delta, se_factor * rms SE)``, with ``rms SE = sqrt(tr(M S_a M) + ||S_b^-1 d_b||^2)``,
 is reported next to it.
 
+**The lab's data, not the linearisation's** (``truth_draws``, default 20). The diagnosis scores a new flood with the
+linearised predictive densities above, but the lab's flood comes from the truth's actual parameters, which its
+calibration knows only up to ``C_a``. Where a design extrapolates beyond what the calibration constrains (the
+polymer slugs at twice the salinity: a regime change of the phase behaviour that the calibration coreflood never
+visits) the truth's forward runs at parameter draws leave its own linearised prediction far behind, and the truth's
+score collapses. So the data sets are ``w = W_a (mu_a(z_j) - mu_a) + e`` with ``z_j ~ N(z_a, C_a)`` (clipped to
+the unit box; ``truth_draws`` forward runs per hypothesis and design, shared with ``parameter_draws``' when both
+are used) and ``e ~ N(0, I)`` the whitened measurement noise, scored by the linearised densities. The median of the
+truth's mean-square whitened misfit over the draws is reported (``truth_dispersion``: about 1 where the design stays
+where the calibration constrains the truth). ``truth_draws = 0`` draws ``w ~ N(0, S_a)`` instead (linear-Gaussian).
+
+**Over-dispersion** (``dispersion``, default on): the rule applied is the diagnosis's, whose SE is multiplied by
+``sqrt(max(1, phi_a, phi_b))``, ``phi_m`` the mean square of model ``m``'s plain whitened residuals ``w - d_m`` on
+the flood (:mod:`~spflow.plugins.gap.verdict`).
+
+**Numerical error** (``numerical``, a :class:`~spflow.plugins.gap.numerical_error.NumericalTerm`): the diagnosis's
+error model holds the simulator's own numerical error, scaled by ``s`` (:mod:`~spflow.plugins.gap.numerical_error`);
+on a design the spread of the base model's predictions over the alternative numerics is measured at the
+calibrated base point and added to ``W_a`` the same way (a regime change that the numerics resolve differently
+separates nothing then).
+
+Not simulated: the held-out coreflood the diagnosis already has (scored together with the new one), the
+generic-discrepancy competitor, the base model as a competitor and the recalibration when the flood joins the
+calibration data (docs/next_experiment.md, "Where it is blind").
+
 Designs are ranked (``criterion``) by their worst hypothesis (maximin): the smallest decision accuracy over the
 hypotheses (``"accuracy"``), by the accuracy averaged over equally likely hypotheses (``"mean_accuracy"``), or by
 the smallest expected log ratio over pairs (``"expected"``: the Box-Hill / KL choice that ignores the spread).
@@ -58,7 +83,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import xarray as xr
 
-from spflow.core.errors import ParameterError
+from spflow.core.errors import ParameterError, SpflowError
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.parameters import resolve_params
 from spflow.plugins.forward.run_arguments import output_grid
@@ -68,6 +93,7 @@ from .base_model import BaseModel
 from .design_space import Design, design_space
 from .layout import make_layout
 from .least_squares import Fit, model_point
+from .numerical_error import NumericalTerm, inflate
 from .observed import Experiment
 from .prediction import Predictor
 from .quantification import parameter_covariance, raw_jacobian
@@ -139,31 +165,47 @@ def log_ratio_moments(shift: np.ndarray, s_true: np.ndarray, s_alt: np.ndarray, 
 
 
 def decision_power(shifts: Sequence[np.ndarray], covariances: Sequence[np.ndarray], truth: int, *,
-                   min_delta: float = 4.0, se_factor: float = 2.0, draws: int = 4000,
-                   seed: int = 0) -> tuple[np.ndarray, float]:
-    """Simulated power of the decision rule when hypothesis ``truth`` is true: data ``w ~ N(0, S_truth)`` in the
-    truth's whitened coordinates, hypothesis ``m`` predicting ``N(shifts[m], covariances[m])``. Returns, per
-    hypothesis ``b``, ``P(L_tb > min_delta and L_tb > se_factor ||S_t^-1 (w - d_t) - S_b^-1 (w - d_b)||)`` (NaN at
+                   min_delta: float = 4.0, se_factor: float = 2.0, draws: int = 4000, seed: int = 0,
+                   truth_offsets: np.ndarray | None = None,
+                   dispersion: bool = False) -> tuple[np.ndarray, float]:
+    """Simulated power of the decision rule when hypothesis ``truth`` is true, hypothesis ``m`` predicting
+    ``N(shifts[m], covariances[m])`` in the truth's whitened coordinates. Returns, per hypothesis ``b``,
+    ``P(L_tb > min_delta and L_tb > se_factor * sqrt(phi) * ||S_t^-1 (w - d_t) - S_b^-1 (w - d_b)||)`` (NaN at
     ``b = truth``) and the probability that the truth passes against every alternative at once (its decision
-    accuracy). ``seed`` fixes the draws (common random numbers across designs)."""
+    accuracy). ``seed`` fixes the draws (common random numbers across designs).
+
+    The data: ``w ~ N(0, S_truth)`` (the truth's own predictive distribution), or, with ``truth_offsets`` (a
+    ``(K, n)`` array: the whitened deviations of the truth's forward runs at ``K`` parameter draws from its own
+    prediction), ``w = offset_(j mod K) + e_j`` with ``e_j ~ N(0, I)``: the truth's parameters drawn and run through
+    the forward model, measurement noise added -- what the lab's coreflood is when the truth's prediction is not
+    linear in its parameters, scored by the linearised predictive densities the diagnosis uses. ``phi = 1``, or with
+    ``dispersion`` the diagnosis's over-dispersion correction ``max(1, phi_t, phi_b)``, ``phi_m`` the mean square of
+    the plain whitened residuals ``w - d_m`` of model ``m`` (:mod:`~spflow.plugins.gap.verdict`)."""
     k = len(shifts)
     n = np.asarray(shifts[truth]).size
     rng = np.random.default_rng(seed)
-    w = rng.standard_normal((draws, n)) @ np.linalg.cholesky(covariances[truth]).T
-    logp, grad = [], []
+    if truth_offsets is None:
+        w = rng.standard_normal((draws, n)) @ np.linalg.cholesky(covariances[truth]).T
+    else:
+        offsets = np.asarray(truth_offsets, float)
+        if offsets.ndim != 2 or offsets.shape[1] != n or not offsets.shape[0]:
+            raise ParameterError(f"truth_offsets must be a (K >= 1, {n}) array, got shape {offsets.shape}")
+        w = offsets[np.arange(draws) % offsets.shape[0]] + rng.standard_normal((draws, n))
+    logp, grad, phi = [], [], []
     for d, s in zip(shifts, covariances):
         factor = np.linalg.cholesky(s)
         r = w - np.asarray(d)[None, :]
         u = np.linalg.solve(factor, r.T)
         logp.append(-0.5 * np.sum(u**2, axis=0) - np.sum(np.log(np.diag(factor))))
         grad.append(np.linalg.solve(factor.T, u).T)
+        phi.append(np.mean(r**2, axis=1) if dispersion else np.ones(draws))
     power = np.full(k, np.nan)
     every = np.ones(draws, bool)
     for b in range(k):
         if b == truth:
             continue
         ratio = logp[truth] - logp[b]
-        se = np.linalg.norm(grad[truth] - grad[b], axis=1)
+        se = np.linalg.norm(grad[truth] - grad[b], axis=1) * np.sqrt(np.maximum(np.maximum(phi[truth], phi[b]), 1.0))
         ok = (ratio > min_delta) & (ratio > se_factor * se)
         power[b] = float(ok.mean())
         every &= ok
@@ -183,6 +225,22 @@ def _design_experiment(reference: Experiment, design: Design, name: str, variabl
                    observed={v: np.zeros(pv.size) for v in variables})
 
 
+def _draw_deviations(predictor: Predictor, layout, h: Hypothesis, draws: int,
+                     seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(prediction at the fit, whitened deviations ``(n, K)`` of the predictions at ``draws`` parameter draws
+    ``N(z, C)`` (clipped to the unit box; seeded by ``seed``) from it, ``K`` the draws whose runs did not fail).
+    The prediction is NaN if its run failed."""
+    rng = np.random.default_rng(seed)
+    zs = np.clip(rng.multivariate_normal(h.fit.z, h.covariance, size=draws, method="eigh"), 0.0, 1.0)
+    points = [h.fit.point] + [model_point(z, h.fit.n_params, h.fit.candidates) for z in zs]
+    preds = predictor.predict(points, layout.experiments, layout.variables)
+    if preds[0] is None:
+        return np.full(layout.size, np.nan), np.zeros((layout.size, 0))
+    mu = layout.vector(preds[0])
+    done = [layout.whiten(layout.vector(p) - mu) for p in preds[1:] if p is not None]
+    return mu, np.column_stack(done) if done else np.zeros((layout.size, 0))
+
+
 def _parameter_spread(predictor: Predictor, layout, h: Hypothesis, draws: int, diff_step: float,
                       seed: int) -> tuple[np.ndarray, np.ndarray]:
     """(prediction at the fit, whitened spread ``A`` with ``A A'`` the parameter part of the predictive
@@ -193,17 +251,10 @@ def _parameter_spread(predictor: Predictor, layout, h: Hypothesis, draws: int, d
         mu, jac = raw_jacobian(predictor, layout, h.fit, diff_step)
         eigval, eigvec = np.linalg.eigh(h.covariance)
         return mu, layout.whiten(jac) @ (eigvec * np.sqrt(np.clip(eigval, 0.0, None)))
-    rng = np.random.default_rng(seed)
-    zs = np.clip(rng.multivariate_normal(h.fit.z, h.covariance, size=draws, method="eigh"), 0.0, 1.0)
-    points = [h.fit.point] + [model_point(z, h.fit.n_params, h.fit.candidates) for z in zs]
-    preds = predictor.predict(points, layout.experiments, layout.variables)
-    if preds[0] is None:
-        return np.full(layout.size, np.nan), np.zeros((layout.size, 1))
-    mu = layout.vector(preds[0])
-    done = [layout.whiten(layout.vector(p) - mu) for p in preds[1:] if p is not None]
-    if not done:  # every draw failed: no usable spread
+    mu, dev = _draw_deviations(predictor, layout, h, draws, seed)
+    if not dev.shape[1]:  # every draw failed: no usable spread
         return mu, np.full((layout.size, 1), np.nan)
-    return mu, np.column_stack(done) / np.sqrt(len(done))
+    return mu, dev / np.sqrt(dev.shape[1])
 
 
 def _slug_shares(layout, exp: Experiment, shift: np.ndarray, s_alt: np.ndarray) -> dict[str, float]:
@@ -224,7 +275,8 @@ def _duration_h(schedule, q0: float, pv_ml: float) -> float:
 def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: Experiment,
                  designs: Sequence[Design] | None = None, *, variables: Sequence[str] = ("dp", "oil_cut"),
                  min_delta: float = 4.0, se_factor: float = 2.0, criterion: str = "accuracy", draws: int = 4000,
-                 seed: int = 0, parameter_draws: int = 0, diff_step: float = 0.01, parallel=None,
+                 seed: int = 0, parameter_draws: int = 0, truth_draws: int = 20, dispersion: bool = True,
+                 numerical: NumericalTerm | None = None, diff_step: float = 0.01, parallel=None,
                  log: Callable[[str], None] | None = None) -> xr.Dataset:
     """Rank ``designs`` (default: :func:`design_space` of the reference schedule at its rate) by how well they
     separate ``hypotheses`` (at least two, distinct names), each a calibrated point of ``base`` (or of its own
@@ -242,8 +294,14 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
         raise ParameterError(f"min_delta and se_factor must be finite and >= 0, got {min_delta!r}, {se_factor!r}")
     if isinstance(parameter_draws, bool) or not isinstance(parameter_draws, int) or parameter_draws < 0:
         raise ParameterError(f"parameter_draws must be an integer >= 0 (0: linearised), got {parameter_draws!r}")
+    if isinstance(truth_draws, bool) or not isinstance(truth_draws, int) or not 0 <= truth_draws <= draws:
+        raise ParameterError(f"truth_draws must be an integer in [0, draws = {draws}] (0: the truth's data from its "
+                             f"linearised predictive distribution), got {truth_draws!r}")
     if criterion not in CRITERIA:
         raise ParameterError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+    if numerical is not None and not (math.isfinite(numerical.scale) and numerical.scale >= 0.0):
+        raise ParameterError(f"numerical.scale must be finite and >= 0 (the numerical-error term's scale), got "
+                             f"{numerical.scale!r}")
     unmeasured = sorted(set(variables) - set(reference.observed))
     if not variables or unmeasured:
         raise ParameterError(f"variables {unmeasured or list(variables)} are not measured in the reference coreflood "
@@ -265,15 +323,26 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
     moments = {key: np.full((nd, k, k), np.nan) for key in ("expected", "sd", "se", "margin")}
     power = np.full((nd, k, k), np.nan)
     accuracy = np.full((nd, k), np.nan)
+    truth_phi = np.full((nd, k), np.nan)
     where = np.full((nd, k, k), None, dtype=object)
     failed = np.zeros(nd, int)
     points = np.zeros(nd, int)
+    numerical_runs = 0
     for i, (design, exp) in enumerate(zip(designs, exps)):
         say(f"design {i + 1}/{nd}: {design.label}")
         preds = [p.predict([h.fit.point], [exp.name], list(variables))[0] for p, h in zip(predictors, hypotheses)]
         if any(p is None for p in preds):
             failed[i] = sum(p is None for p in preds)
             continue
+        numerics = None
+        if numerical is not None and numerical.scale > 0.0:
+            own = Predictor(base, [exp], parallel)
+            try:  # the diagnosis's numerical-error term on this design (its base model at other numerics)
+                term = numerical.spread(own)
+            except SpflowError:
+                failed[i] = k
+                continue
+            numerics, numerical_runs = term.series, numerical_runs + term.runs + own.runs
         series = [p[exp.name] for p in preds]
         common = {v: np.all([np.isfinite(s[v]) for s in series], axis=0) for v in variables}
         for a in range(k):
@@ -281,6 +350,8 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
             # hypothesis is compared on the points all of them predict
             observed = {v: np.where(common[v], series[a][v], np.nan) for v in variables}
             layout = make_layout([replace(exp, observed=observed)], list(variables))
+            if numerics is not None:
+                layout = inflate(layout, numerics, numerical.scale)
             points[i] = layout.size
             mu_a = layout.observed()
             shifts, covs = [], []
@@ -292,7 +363,14 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                     s = np.eye(layout.size) + spread @ spread.T
                 shifts.append(layout.whiten(mu - mu_a))
                 covs.append(s)
-            if not all(np.all(np.isfinite(x)) for x in shifts + covs):
+            offsets = None
+            if truth_draws and hypotheses[a].covariance is not None:
+                # the truth's data: its forward runs at parameter draws (same seed as its spread: memoised runs)
+                offsets = _draw_deviations(predictors[a], layout, hypotheses[a], truth_draws, seed + a)[1].T
+                if offsets.shape[0]:
+                    truth_phi[i, a] = 1.0 + float(np.median(np.mean(offsets**2, axis=1)))
+            if not all(np.all(np.isfinite(x)) for x in shifts + covs) or (offsets is not None
+                                                                          and not offsets.shape[0]):
                 failed[i] += 1
                 continue
             for b in range(k):
@@ -303,7 +381,8 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                         moments[key][i, a, b] = getattr(r, key)
                     where[i, a, b] = _slug_shares(layout, exp, shifts[b] - shifts[a], covs[b])
             power[i, a], accuracy[i, a] = decision_power(shifts, covs, a, min_delta=min_delta, se_factor=se_factor,
-                                                         draws=draws, seed=seed)
+                                                         draws=draws, seed=seed, truth_offsets=offsets,
+                                                         dispersion=dispersion)
     off = ~np.eye(k, dtype=bool)
     usable = np.all(np.isfinite(accuracy), axis=1)
 
@@ -340,6 +419,10 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
                 "alternative (simulated)"}),
             "accuracy": (("design", "truth"), accuracy[order], {
                 "units": "1", "long_name": "probability that the truth beats every alternative (simulated)"}),
+            "truth_dispersion": (("design", "truth"), truth_phi[order], {
+                "units": "1", "long_name": "median over the truth's parameter draws of the mean square of its "
+                "whitened data about its own prediction at the fit (1 + noise-free part; about 1 when the design "
+                "stays where the calibration constrains the truth)"}),
             "worst_accuracy": ("design", per_design(worst_accuracy), {
                 "units": "1", "long_name": "smallest decision accuracy over the hypotheses"}),
             "mean_accuracy": ("design", per_design(mean_accuracy), {
@@ -379,10 +462,18 @@ def rank_designs(hypotheses: Sequence[Hypothesis], base: BaseModel, reference: E
             "parameter_uncertainty": json.dumps({h.name: h.covariance is not None for h in hypotheses}),
             "parameter_uncertainty_method": (f"Monte Carlo over {parameter_draws} parameter draws" if parameter_draws
                                              else "linearised (forward-difference Jacobian)"),
-            "forward_runs": int(sum(p.runs for p in predictors)),
+            "truth_draws": int(truth_draws),
+            "dispersion_correction": int(bool(dispersion)),
+            "truth_data": (f"the truth's forward runs at {truth_draws} parameter draws from its calibration "
+                           "covariance plus measurement noise" if truth_draws else
+                           "the truth's linearised predictive distribution"),
+            "forward_runs": int(sum(p.runs for p in predictors)) + numerical_runs,
+            "numerical_error": (f"the diagnosis's numerical-error term, scale {numerical.scale:.3g}, spread over "
+                                f"{len(numerical.variants)} alternative numerics at the calibrated base point"
+                                if numerical is not None and numerical.scale > 0.0 else "none"),
             "method": "Gaussian predictive distributions under the diagnosis's error model with linearised "
-                      "parameter uncertainty; expected log ratio = KL divergence; power = P(log ratio > margin), "
-                      "normal approximation (spflow.plugins.gap.next_experiment)",
+                      "parameter uncertainty; expected log ratio = KL divergence; power and accuracy simulated with "
+                      "the decision rule (spflow.plugins.gap.next_experiment)",
         },
     )
     return ds

@@ -37,7 +37,7 @@ from .layout import Block, Layout
 from .least_squares import Fit
 from .prediction import Predictor
 
-__all__ = ["Numerics", "DEFAULT_VARIANTS", "NumericalSpread", "numerical_spread", "inflate"]
+__all__ = ["Numerics", "DEFAULT_VARIANTS", "NumericalSpread", "NumericalTerm", "numerical_spread", "inflate"]
 
 
 @dataclass(frozen=True)
@@ -125,3 +125,19 @@ def inflate(layout: Layout, spread: Mapping[tuple[str, str], np.ndarray], factor
         noise = BlockErrorModel(np.sqrt(b.noise.scale**2 + d**2), b.noise.phi)
         blocks.append(Block(b.variable, b.experiment, b.index, b.pv, b.observed, b.slug, noise))
     return Layout(tuple(blocks))
+
+
+@dataclass(frozen=True)
+class NumericalTerm:
+    """A diagnosis's numerical-error term, carried to experiments it has not seen (e.g. a proposed next coreflood):
+    the calibrated base point the spread is measured at, the alternative numerics, the widening window and the
+    estimated scale ``s`` (:mod:`~spflow.plugins.gap.numerical_scale`)."""
+
+    fit: Fit
+    variants: tuple[Numerics, ...]
+    scale: float
+    window: int = 3
+
+    def spread(self, predictor: Predictor) -> NumericalSpread:
+        """The spread on ``predictor``'s experiments (a predictor of the base model the fit belongs to)."""
+        return numerical_spread(predictor, self.fit, self.variants, self.window)

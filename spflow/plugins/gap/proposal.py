@@ -4,9 +4,10 @@ From the ranked table of :func:`~spflow.plugins.gap.next_experiment.rank_designs
 
 * ``next_experiment.toml`` — the chosen design's schedule in the schedule-file format of
   :mod:`spflow.io.schedule_file` (per-slug ``rate_ml_min`` where the design sets a rate);
-* ``next_experiment.json`` — why: the hypotheses, the design's label and kind, its decision accuracy per hypothesis, its predicted
-  power and expected log predictive ratio per (truth, alternative) pair, its injected PV and duration, the runner-up designs, and the
-  assumptions the ranking made (base rate and its source, noise model source, decision margins, criterion).
+* ``next_experiment.json`` — why: the hypotheses, the design's label and kind, its decision accuracy per hypothesis
+  and the truth's over-dispersion on it (``truth_dispersion``), its predicted power and expected log predictive ratio
+  per (truth, alternative) pair, its injected PV and duration, the runner-up designs, and the assumptions the ranking
+  made (base rate and its source, noise model source, how the lab data were simulated, decision margins, criterion).
 
 The same design as an experiment of a study file: :func:`spflow.study.proposed_experiment.study_experiment_toml`
 (the study package depends on this one, not the reverse).
@@ -57,6 +58,7 @@ def proposal_summary(table: xr.Dataset, rank: int = 1, runners_up: int = 4) -> d
         "worst_accuracy": _number(row["worst_accuracy"]),
         "mean_accuracy": _number(row["mean_accuracy"]),
         "accuracy": {a: _number(row["accuracy"].sel(truth=a)) for a in names},
+        "truth_dispersion": {a: _number(row["truth_dispersion"].sel(truth=a)) for a in names},
         "worst_expected_log_ratio_nat": _number(row["worst_expected_log_ratio"]),
         "separation_by_slug": json.loads(str(row["separation_by_slug"].values)),
         "pairs": pairs,
@@ -67,7 +69,8 @@ def proposal_summary(table: xr.Dataset, rank: int = 1, runners_up: int = 4) -> d
         "assumptions": {key: table.attrs[key] for key in (
             "reference_experiment", "variables", "criterion", "min_delta", "se_factor", "draws", "seed",
             "base_rate_ml_min",
-            "base_rate_source", "noise_model_source", "parameter_uncertainty", "method") if key in table.attrs},
+            "base_rate_source", "noise_model_source", "parameter_uncertainty", "truth_data", "dispersion_correction",
+            "method") if key in table.attrs},
     }
 
 
