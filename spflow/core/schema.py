@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .cf_metadata import UNITS_VARIABLE, has_units_per_element
+from .cf_metadata import UNITS_VARIABLE, has_units_per_element, udunits
 from .errors import SchemaError
 
 __all__ = ["Variable", "DatasetSchema", "ANY"]
@@ -92,7 +92,9 @@ class DatasetSchema:
                 found = var.attrs.get("units")
                 if found is None:
                     raise SchemaError(f"{where} variable {name!r}: expected attrs['units'] = {spec.units!r}, found no units")
-                if spec.units and found != spec.units:
+                # (a unit declared in the catalogue notation and stored in its UDUNITS form, as the executor
+                # writes every result -- cf_metadata.note_units -- is the same unit: "PV" and "1", "cP" and "cpoise")
+                if spec.units and udunits(found) != udunits(spec.units):
                     raise SchemaError(f"{where} variable {name!r}: expected units {spec.units!r}, found {found!r}")
             if spec.units_variable is not None:
                 self._check_units_variable(ds, name, spec.units_variable, where)

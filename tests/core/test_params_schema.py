@@ -80,3 +80,15 @@ def test_schema_requires_units_attr():
     ds["dp"].attrs = {}
     with pytest.raises(SchemaError, match="variable 'dp': expected attrs\\['units'\\] = 'Pa', found no units"):
         SCHEMA.validate(ds, stage="forward", port="responses")
+
+
+def test_a_unit_in_catalogue_notation_matches_its_udunits_form_and_nothing_else():
+    # the executor stores every result with its units in UDUNITS form (cf_metadata.note_units): a schema declaring
+    # "PV" or "cP" must accept what it stored ("1", "cpoise") -- on a cache hit too -- and still reject other units
+    schema = DatasetSchema(("sample",), {"pv_front": Variable(("sample",), units="PV"),
+                                         "mu": Variable(("sample",), units="cP")})
+    stored = xr.Dataset({"pv_front": ("sample", [0.4, 0.5], {"units": "1"}),
+                         "mu": ("sample", [1.0, 2.0], {"units": "cpoise"})})
+    schema.validate(stored, stage="plugin", port="output")
+    with pytest.raises(SchemaError, match="expected units 'cP', found 'Pa s'"):
+        schema.validate(stored.assign(mu=stored.mu.assign_attrs(units="Pa s")), stage="plugin", port="output")
