@@ -396,11 +396,12 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                                                                                             nan=-np.inf))
                      if i not in chosen]
 
-            def gap_found() -> bool:
-                return significant or targeted_pvalue([x.chi2_drop for x in step.scores.values()],
-                                                      len(candidates)) < options.alpha
+            def gap_test() -> tuple[float, bool]:  # (targeted p, gap significant on either test)
+                p = targeted_pvalue([x.chi2_drop for x in step.scores.values()], len(candidates))
+                return p, significant or p < options.alpha
 
-            while (options.expand_shortlist and order and gap_found()
+            targeted, found = gap_test()
+            while (options.expand_shortlist and order and found
                    and not any(passes(x, options.rule) for x in step.scores.values())):
                 batch, order = order[: options.shortlist], order[options.shortlist:]
                 say(f"no refit passes: refitting the next candidates in screen order "
@@ -408,13 +409,12 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                 for i in batch:
                     add_refit(i)
                     step.shortlisted.append(remaining[i].name)
-        steps.append(step)
-        if len(steps) == 1:
-            targeted = targeted_pvalue([x.chi2_drop for x in step.scores.values()], len(candidates))
-            significant = significant or targeted < options.alpha
-            if significant and pvalue >= options.alpha:
+                targeted, found = gap_test()
+            if found and not significant:
                 say(f"calibration gap significant on the targeted test only (p = {targeted:.3g}; omnibus p = "
                     f"{pvalue:.3g})")
+            significant = found
+        steps.append(step)
         # nothing is accepted without a significant calibration gap (verdict.py: gains only out of sample)
         chosen_set = ambiguity_set(list(step.scores.values()), options.rule) if significant else []
         if chosen_set:
