@@ -25,15 +25,16 @@ twins, so a long study can be stopped and resumed); the report (``docs/gap_valid
 ``docs/figures/<report name>_power_*.png``) is rebuilt from all results.
 
 **Second phase: the proposed next experiment** (``--next-experiment``, issue 20). For every finished twin whose
-diagnosis is ambiguous (its final ambiguity set holds two or more candidates, :func:`is_ambiguous`) the twin is
-regenerated from its record's scenario and seed, diagnosed again to obtain the diagnosis object,
+diagnosis is ambiguous (its final ambiguity set holds two or more candidates, :func:`is_ambiguous`) or
+unattributed (candidates close the calibration gap, none is declared: the proposal then separates the base model
+from them; :func:`needs_next_experiment`) the twin is regenerated from its record's scenario and seed, diagnosed again to obtain the diagnosis object,
 ``spflow.plugins.gap.next_after_diagnosis.propose_next_experiment`` ranks the corefloods a lab could run next on
 the twin's core, and the truth's coreflood on the best design (same measurement chain, noise seed ``seed + 2``)
 is added as a second calibration coreflood before the twin is diagnosed once more (:func:`run_next_experiment`
 says why calibration; ``--added-as heldout`` scores it next to BCF2 instead). Results go to
 ``<key>.next_experiment.jsonl`` (``..._heldout.jsonl``) next to the first phase's (resumable, like it) and the
 proposals' files to ``next_experiment/<key>/<twin>/``; the report gets a section "after the proposed
-next experiment" per result set (before/after rates among the ambiguous twins, the study-wide metrics with their
+next experiment" per result set (before/after rates among the phase's twins, the study-wide metrics with their
 results substituted, predicted against realised decision accuracy), partial results included.
 
     python scripts/gap_validation.py --null 60 --per-effect 30 --pairs 30 --ooc 30 --jobs 2     # the full study
@@ -275,12 +276,25 @@ def next_experiment_file(results: Path, key: str, role: str) -> Path:
 
 
 def is_ambiguous(record: dict) -> bool:
-    """Whether a first-phase twin goes into the next-experiment phase: its diagnosis's final ambiguity set
+    """Whether a first-phase twin is ambiguous: its diagnosis's final ambiguity set
     (``GapDiagnosis.ambiguity``: the first accepted step's set, the record's ``ambiguity_set``) holds two or more
-    candidates -- exactly the twins for which ``propose_next_experiment`` has competing hypotheses. A twin whose
+    candidates, which ``propose_next_experiment`` takes as its competing hypotheses. A twin whose
     verdict is ``ambiguous`` only through a later step (first set a single effect, a second set of several) is not
     in the phase: its first answer is decided, and the proposal separates the first set only."""
     return len(record["ambiguity_set"] or []) >= 2
+
+
+def is_unattributed(record: dict) -> bool:
+    """Whether a first-phase twin's verdict is ``unattributed``: candidates close the calibration gap but none is
+    declared (weakly identified); its proposal separates the base model from those candidates."""
+    return record["verdict"] == "unattributed"
+
+
+def needs_next_experiment(record: dict) -> bool:
+    """Whether a first-phase twin goes into the next-experiment phase: ambiguous (:func:`is_ambiguous`) or
+    unattributed (:func:`is_unattributed`) -- the verdicts for which ``propose_next_experiment`` can have competing
+    hypotheses (an unattributed verdict whose gap no candidate closes gets no proposal and keeps its result)."""
+    return is_ambiguous(record) or is_unattributed(record)
 
 
 def twin_spec(record: dict) -> dict:
@@ -308,14 +322,14 @@ def _proposal_fields(proposal) -> dict:
 
 
 def run_next_experiment(record: dict, directory: Path, role: str = "calibration") -> dict:
-    """The next-experiment phase of one ambiguous first-phase twin (``record``).
+    """The next-experiment phase of one ambiguous or unattributed first-phase twin (``record``).
 
     The twin is regenerated from the record's scenario and seed (:func:`twin`: the same truth and the same two
     corefloods, bit for bit) and diagnosed again with the same options, which gives the :class:`GapDiagnosis` the
     proposal needs (the record holds only its summary; ``reproduces_first_phase`` says whether the verdict, the
     accepted steps and the ambiguity set came out as recorded). ``propose_next_experiment`` ranks the design space
-    of BCF1 for the final ambiguity set and writes the proposal into ``directory``; the truth's coreflood on the
-    best design is generated through the same measurement chain with noise seed ``seed + NEXT_SEED_OFFSET`` and
+    of BCF1 for its competing hypotheses (``competing_fits``) and writes the proposal into ``directory``; the
+    truth's coreflood on the best design is generated through the same measurement chain with noise seed ``seed + NEXT_SEED_OFFSET`` and
     the twin is diagnosed again with it.
 
     The new coreflood joins the **calibration** data (BCF1 + the new flood; BCF2 stays held out). That is what a
@@ -512,20 +526,23 @@ def lift_metrics(records: list[dict], lifts: list[dict]) -> dict:
     """What the next experiment changed: first-phase ``records`` and next-experiment-phase ``lifts`` (matched by
     id and seed; a twin counts as done when its phase record exists).
 
-    * ``ambiguous`` / ``done``: ambiguous twins (:func:`is_ambiguous`) among the records and how many are done;
-    * ``all`` / ``snr3``: among the done ambiguous single-effect twins (all SNR, and SNR >= 3), ``before`` (the
+    * ``ambiguous`` / ``unattributed`` / ``phase`` / ``done``: ambiguous twins (:func:`is_ambiguous`) and
+      unattributed ones (:func:`is_unattributed`) among the records, the twins of the phase
+      (:func:`needs_next_experiment`) and how many of those are done;
+    * ``all`` / ``snr3``: among the done single-effect twins of the phase (all SNR, and SNR >= 3), ``before`` (the
       first-phase record) and ``after`` (the diagnosis with the added coreflood) rates of the truth named first,
       of the truth inside the ambiguity set and of the truth alone (first accepted set exactly the truth; 0 before
-      by definition of an ambiguous twin);
+      for an ambiguous or unattributed twin); ``kinds`` the same split by the first phase's verdict
+      (``ambiguous``, ``unattributed``);
     * ``study``: :func:`metrics` of every record (LIFT_METRICS keys) before, and after substituting each done
-      ambiguous twin's result with the added coreflood (a twin without a proposal keeps its first result);
+      twin's result with the added coreflood (a twin without a proposal keeps its first result);
     * ``predicted``: over the done twins whose truth is one of the proposal's hypotheses, the mean predicted
       decision accuracy of the truth and the realised rate of the diagnosis with the added coreflood answering the
       truth alone (first accepted set exactly the truth), the event the accuracy predicts.
     """
-    ambiguous = [r for r in records if is_ambiguous(r)]
+    phase = [r for r in records if needs_next_experiment(r)]
     by_id = {x["id"]: x for x in lifts}
-    done = [r for r in ambiguous if r["id"] in by_id and by_id[r["id"]]["seed"] == r["seed"]]
+    done = [r for r in phase if r["id"] in by_id and by_id[r["id"]]["seed"] == r["seed"]]
     after = {r["id"]: {**r, **by_id[r["id"]]["after"]} if by_id[r["id"]]["after"] else r for r in done}
     single = [r for r in done if r["scenario"].startswith("single:")]
 
@@ -534,11 +551,18 @@ def lift_metrics(records: list[dict], lifts: list[dict]) -> dict:
                 "truth_in_set": _rate(_truth_name(r) in (view(r)["ambiguity_set"] or []) for r in rows),
                 "truth_alone": _rate(view(r)["accepted"][:1] == [[_truth_name(r)]] for r in rows)}
 
-    out = {"ambiguous": len(ambiguous), "done": len(done),
+    out = {"ambiguous": sum(map(is_ambiguous, records)), "unattributed": sum(map(is_unattributed, records)),
+           "phase": len(phase), "done": len(done),
            "reproduced": sum(by_id[r["id"]]["reproduces_first_phase"] for r in done),
            "without_proposal": sum(by_id[r["id"]]["proposal"] is None for r in done)}
-    for label, rows in (("all", single), ("snr3", [r for r in single if r["snr"] >= 3])):
-        out[label] = {"before": rates(rows, lambda r: r), "after": rates(rows, lambda r: after[r["id"]])}
+
+    def before_after(rows):
+        return {label: {"before": rates(sub, lambda r: r), "after": rates(sub, lambda r: after[r["id"]])}
+                for label, sub in (("all", rows), ("snr3", [r for r in rows if r["snr"] >= 3]))}
+
+    out |= before_after(single)
+    out["kinds"] = {kind: before_after([r for r in single if test(r)])
+                    for kind, test in (("ambiguous", is_ambiguous), ("unattributed", is_unattributed))}
     substituted = [after.get(r["id"], r) for r in records]
     study = {"before": metrics(records), "after": metrics(substituted)}
     out["study"] = {k: {when: study[when][k] for when in study} for k in LIFT_METRICS}
@@ -645,22 +669,25 @@ def _lift_section(records: list[dict], lifts: list[dict], role: str) -> tuple[li
     m = lift_metrics(records, lifts)
     by_id = {x["id"]: x for x in lifts}
     lines = [f"Ambiguous twins (final ambiguity set of two or more candidates): {m['ambiguous']} of {len(records)}; "
-             f"next-experiment phase done for {m['done']} of {m['ambiguous']}"
-             + (" (partial results)" if m["done"] < m["ambiguous"] else "") + f"; {m['reproduced']} of {m['done']} "
+             f"unattributed twins (the base against the candidates that close the gap): {m['unattributed']}; "
+             f"next-experiment phase done for {m['done']} of {m['phase']}"
+             + (" (partial results)" if m["done"] < m["phase"] else "") + f"; {m['reproduced']} of {m['done']} "
              "regenerated diagnoses reproduce the first phase's verdict and sets; "
              f"{m['without_proposal']} without a proposal. Each done twin got the truth's coreflood on the "
              "proposed design (same core and measurement chain, its own noise seed) "
              + ("as a second calibration coreflood, BCF2 still held out" if role == "calibration" else
                 "as a second held-out coreflood (BCF1 alone calibrates)") + " (`run_next_experiment`).", ""]
     if m["done"]:
-        lines += ["| ambiguous single-effect twins | n | correct first before | after | truth in set before | after "
-                  "| truth alone before | after |", "|---|---|---|---|---|---|---|---|"]
-        for label, title in (("all", "all SNR"), ("snr3", "SNR >= 3")):
-            b, a = m[label]["before"], m[label]["after"]
-            lines.append(f"| {title} | {b['correct_first'][1]} | "
-                         + " | ".join(f"{_fmt(b[k][0])} | {_fmt(a[k][0])}"
-                                      for k in ("correct_first", "truth_in_set", "truth_alone")) + " |")
-        lines += ["", "Study-wide, each done ambiguous twin's result replaced by its result with the added coreflood:",
+        lines += ["| single-effect twins of the phase | n | correct first before | after | truth in set before "
+                  "| after | truth alone before | after |", "|---|---|---|---|---|---|---|---|"]
+        for kind, group in (("ambiguous + unattributed", m), *m["kinds"].items()):
+            for label, title in (("all", "all SNR"), ("snr3", "SNR >= 3")):
+                b, a = group[label]["before"], group[label]["after"]
+                if b["correct_first"][1]:
+                    lines.append(f"| {kind}, {title} | {b['correct_first'][1]} | "
+                                 + " | ".join(f"{_fmt(b[k][0])} | {_fmt(a[k][0])}"
+                                              for k in ("correct_first", "truth_in_set", "truth_alone")) + " |")
+        lines += ["", "Study-wide, each done twin's result replaced by its result with the added coreflood:",
                   "", "| metric | before | after | n | target | met (after) |", "|---|---|---|---|---|---|"]
         for key, (op, goal) in LIFT_METRICS.items():
             b, a = m["study"][key]["before"], m["study"][key]["after"]
@@ -680,7 +707,7 @@ def _lift_section(records: list[dict], lifts: list[dict], role: str) -> tuple[li
                   "|---|---|---|---|---|---|---|---|"]
         for r in records:
             x = by_id.get(r["id"])
-            if x is None or not is_ambiguous(r) or x["seed"] != r["seed"]:
+            if x is None or not needs_next_experiment(r) or x["seed"] != r["seed"]:
                 continue
             truth = ", ".join(f"{k}={v:.3g}" for k, v in {**r["truth_effects"], **r["truth_fixed"]}.items()) or "–"
             prop = x["proposal"]
@@ -799,7 +826,8 @@ def add_snrs(file: Path, jobs: int, every: int = 10) -> int:
 
 
 def next_experiment_phase(results: Path, key: str, cells: int, jobs: int, role: str = "calibration") -> Path:
-    """Run :func:`run_next_experiment` (added coreflood as ``role`` data) on every ambiguous twin of
+    """Run :func:`run_next_experiment` (added coreflood as ``role`` data) on every twin of the phase
+    (:func:`needs_next_experiment`: ambiguous or unattributed) of
     ``results/<key>.jsonl`` not yet in its results file (:func:`next_experiment_file`, appended as each finishes);
     proposals go to ``results/next_experiment/<key>/<twin>/``. Returns the phase's results file."""
     from joblib import Parallel, delayed
@@ -807,9 +835,9 @@ def next_experiment_phase(results: Path, key: str, cells: int, jobs: int, role: 
     first = _records(results / f"{key}.jsonl", cells)
     file = next_experiment_file(results, key, role)
     done = {i for i, r in _records(file, cells).items() if first.get(i, {}).get("seed") == r["seed"]}
-    todo = [r for r in first.values() if is_ambiguous(r) and r["id"] not in done]
-    print(f"{sum(map(is_ambiguous, first.values()))} ambiguous of {len(first)} finished twins, {len(todo)} to run",
-          flush=True)
+    todo = [r for r in first.values() if needs_next_experiment(r) and r["id"] not in done]
+    print(f"{sum(map(is_ambiguous, first.values()))} ambiguous and {sum(map(is_unattributed, first.values()))} "
+          f"unattributed of {len(first)} finished twins, {len(todo)} to run", flush=True)
     folder = results / NEXT_EXPERIMENT / key
     with file.open("a") as fh:
         for x in Parallel(n_jobs=jobs, return_as="generator")(

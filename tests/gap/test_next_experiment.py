@@ -415,9 +415,34 @@ def test_competing_fits_take_the_last_step_that_refitted_every_member():
     from spflow.plugins.gap.next_after_diagnosis import competing_fits
 
     steps = [SimpleNamespace(fits={"a": 1, "b": 2, "c": 3}), SimpleNamespace(fits={"a": 10, "c": 30})]
-    assert competing_fits(SimpleNamespace(ambiguity=["a", "b"], steps=steps)) == {"a": 1, "b": 2}
-    assert competing_fits(SimpleNamespace(ambiguity=["a", "c"], steps=steps)) == {"a": 10, "c": 30}
-    assert competing_fits(SimpleNamespace(ambiguity=["a"], steps=steps)) == {}  # nothing to separate
+    diag = lambda verdict, ambiguity, closers=(): SimpleNamespace(  # noqa: E731
+        verdict=verdict, ambiguity=list(ambiguity), closers=list(closers), steps=steps, base_fit=0)
+    assert competing_fits(diag("ambiguous", ["a", "b"])) == {"a": 1, "b": 2}
+    assert competing_fits(diag("ambiguous", ["a", "c"])) == {"a": 10, "c": 30}
+    assert competing_fits(diag("effect", ["a"])) == {}  # nothing to separate
+    assert competing_fits(diag("none", [])) == {}
+
+
+def test_competing_fits_of_an_unattributed_gap_are_the_base_against_its_closers():
+    """Weakly identified: candidates close the calibration gap but none is declared. The base model itself is a
+    hypothesis, against the first step's refits of at most MAX_UNATTRIBUTED closers (best held-out score first)."""
+    from types import SimpleNamespace
+
+    from spflow.plugins.gap.next_after_diagnosis import BASE_HYPOTHESIS, MAX_UNATTRIBUTED, competing_fits
+
+    fits = {name: i + 1 for i, name in enumerate("abcde")}
+    steps = [SimpleNamespace(fits=fits), SimpleNamespace(fits={"a": 10})]
+    closers = ["d", "a", "e", "b"]
+    got = competing_fits(SimpleNamespace(verdict="unattributed", ambiguity=[], closers=closers, steps=steps,
+                                         base_fit=0))
+    assert MAX_UNATTRIBUTED == 3
+    assert got == {BASE_HYPOTHESIS: 0, "d": 4, "a": 1, "e": 5}
+    assert list(got) == [BASE_HYPOTHESIS, "d", "a", "e"]
+    # an unattributed verdict without closers (a gap only the omnibus test finds, which no candidate closes) and an
+    # out-of-catalogue verdict propose nothing
+    for verdict, cl in (("unattributed", []), ("out_of_catalogue", ["a", "b"])):
+        assert competing_fits(SimpleNamespace(verdict=verdict, ambiguity=[], closers=cl, steps=steps,
+                                              base_fit=0)) == {}
 
 
 def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
@@ -431,7 +456,8 @@ def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
     exp, fits, _, _, bases = toy
     # the toy's hypotheses differ by their base model (the diagnosis's by their candidate effect): pass the bases
     monkeypatch.setattr(nad, "hypotheses_from_fits", lambda f: hypotheses_from_fits(f, bases=bases))
-    diag = SimpleNamespace(ambiguity=["shear_thinning", "viscosity"], steps=[SimpleNamespace(fits=fits)],
+    diag = SimpleNamespace(verdict="ambiguous", closers=[], ambiguity=["shear_thinning", "viscosity"],
+                           steps=[SimpleNamespace(fits=fits)],
                            calibration=[exp], base=bases["viscosity"], options=Options(variables=("dp", "oil_cut")),
                            base_fit=fits["viscosity"], numerical_scale=None)  # (no numerical-error term)
     proposal = nad.propose_next_experiment(diag, tmp_path)

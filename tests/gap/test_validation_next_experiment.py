@@ -145,6 +145,29 @@ def test_lift_metrics_by_hand():
     assert m["predicted"]["realised"] == (0.5, 2)
 
 
+def test_unattributed_twins_join_the_phase_and_are_counted_apart():
+    """An unattributed twin (candidates close the gap, none declared) is in the phase; its before/after rates are
+    counted with the ambiguous ones and apart (``kinds``)."""
+    perm = record("perm#0", "single:permeability_reduction", 10.0, "unattributed",
+                  truth={"permeability_reduction": 2.0})
+    assert gv.needs_next_experiment(perm) and gv.is_unattributed(perm) and not gv.is_ambiguous(perm)
+    assert not gv.needs_next_experiment(record("x", "null", 0, "out_of_catalogue"))
+    lifts = LIFTS + [lift("perm#0", 1, [["permeability_reduction"]], ["permeability_reduction"],
+                          {"base": 0.3, "permeability_reduction": 0.9, "dispersion": 0.8})]
+    m = gv.lift_metrics(RECORDS + [perm], lifts)
+    assert (m["ambiguous"], m["unattributed"], m["phase"], m["done"]) == (4, 1, 5, 4)
+    unattributed = m["kinds"]["unattributed"]["snr3"]
+    assert unattributed["before"]["correct_first"] == (0.0, 1)
+    assert unattributed["after"]["correct_first"] == (1.0, 1)
+    assert unattributed["after"]["truth_alone"] == (1.0, 1)
+    # the ambiguous ones are as in test_lift_metrics_by_hand; together at SNR >= 3: cap#0, disp#0, perm#0
+    assert m["kinds"]["ambiguous"]["snr3"]["after"]["correct_first"] == (0.5, 2)
+    assert m["snr3"]["after"]["correct_first"] == pytest.approx((2 / 3, 3))
+    # predicted against realised now also over perm#0 (its truth is one of the hypotheses): (0.7 + 0.4 + 0.9) / 3
+    assert m["predicted"]["accuracy_of_truth"] == pytest.approx((2.0 / 3, 3))
+    assert m["predicted"]["realised"] == pytest.approx((2 / 3, 3))
+
+
 def test_report_section_says_how_many_are_done(tmp_path):
     md = tmp_path / "report.md"
     gv.write_report({"Δp + oil cut": RECORDS}, md, ["test"], {"Δp + oil cut": {"calibration": LIFTS}})

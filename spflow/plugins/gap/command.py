@@ -16,7 +16,8 @@ default it took are printed first. Writes
 ``gap_report.nc``, ``summary.json``, the figures and ``report.html`` (run settings, the verdict, candidate scores, gap
 closed and numerical-error scale as tables with units (:mod:`~spflow.plugins.gap.summary_tables`), the figures,
 software versions) into ``DIR`` (default ``out/diagnose``); when the verdict leaves
-two or more candidates in its ambiguity set, also the proposed next coreflood (``next_experiment.toml``, ``.json``,
+two or more candidates in its ambiguity set, or an unattributed gap (the base against the candidates that close it),
+also the proposed next coreflood (``next_experiment.toml``, ``.json``,
 ``next_experiment_study.toml``; :mod:`~spflow.plugins.gap.next_after_diagnosis`), unless ``--no-next-experiment``.
 """
 
@@ -126,7 +127,7 @@ def main(args: argparse.Namespace) -> int:
     if args.next_experiment:
         proposal = propose_next_experiment(diag, out, parallel=ctx.parallel() if args.jobs > 1 else None)
         lines += proposal.lines() if proposal else ["next experiment: none proposed (no ambiguity set of two or "
-                                                    "more candidates to separate)"]
+                                                    "more candidates and no unattributed gap to separate)"]
     for line in text_lines(lines):
         print(line)
     html = write_html_report(out / "report.html", "spflow diagnose",

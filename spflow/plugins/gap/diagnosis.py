@@ -172,6 +172,9 @@ class GapDiagnosis:
     cost: dict[str, Cost] = field(default_factory=dict)
     #: the targeted test of the calibration gap (verdict.targeted_pvalue; NaN before any refit)
     targeted_pvalue: float = float("nan")
+    #: with an ``unattributed`` verdict, the physical candidates of the first step that close half the calibration
+    #: gap without passing out of sample (best held-out score first; verdict.verdict's ``closers``), else empty
+    closers: list[str] = field(default_factory=list)
 
     @property
     def dof(self) -> int:
@@ -520,4 +523,5 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         _label(reference), w_base, w_ref, base_view, final_view,
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
                         time.perf_counter() - start, runs, chi2_measurement, numerical, scale, disc, w_disc, search,
-                        pool, search_runs, tried, notes, ledger.table(), targeted)
+                        pool, search_runs, tried, notes, ledger.table(), targeted,
+                        closers if decided == "unattributed" else [])

@@ -1,8 +1,11 @@
 """The next experiment after a diagnosis (issue 20, item 3): when the verdict leaves candidates that the data do not
-tell apart, rank lab-runnable corefloods by how well they would separate them and write the best one out.
+tell apart, or a gap that candidates close on the calibration data but cannot be attributed (weakly identified
+effects), rank lab-runnable corefloods by how well they would separate them and write the best one out.
 
 The competing hypotheses are the diagnosis's own refits of the members of its final ambiguity set (the last step
-that refitted them: "reference + effect", each with the linearised covariance of its calibration); the reference
+that refitted them: "reference + effect", each with the linearised covariance of its calibration), or, for an
+``unattributed`` verdict, the base model itself against the refits of the candidates that close the gap
+(:func:`competing_fits`); the reference
 coreflood, whose core, rate and measurement chain the new coreflood keeps, is the first calibration coreflood; the
 diagnosis's numerical-error term (its estimated scale, at the calibrated base point) is in the designer's error model
 as in the diagnosis's. The ranking is :func:`~spflow.plugins.gap.next_experiment.rank_designs` over
@@ -24,7 +27,7 @@ from .next_experiment import hypotheses_from_fits, rank_designs
 from .numerical_error import NumericalTerm
 from .proposal import proposal_summary, write_proposal
 
-__all__ = ["NextExperiment", "competing_fits", "propose_next_experiment"]
+__all__ = ["NextExperiment", "competing_fits", "propose_next_experiment", "BASE_HYPOTHESIS", "MAX_UNATTRIBUTED"]
 
 
 @dataclass(frozen=True)
@@ -49,9 +52,26 @@ class NextExperiment:
         return out
 
 
+#: hypothesis name of the base model itself (no catalogued effect added) when an unattributed gap is separated
+BASE_HYPOTHESIS = "base"
+#: the most candidates an unattributed gap's proposal separates from the base (the closers with the best held-out
+#: scores; each hypothesis costs ``truth_draws`` forward runs per design)
+MAX_UNATTRIBUTED = 3
+
+
 def competing_fits(diag: GapDiagnosis) -> dict:
-    """The refits of the final ambiguity set's members (name -> Fit), from the last step that refitted them all;
-    empty when fewer than two candidates remain."""
+    """The competing calibrated models (name -> Fit) a next experiment should separate:
+
+    * an ambiguity set of two or more candidates: the refits of its members, from the last step that refitted them
+      all;
+    * an ``unattributed`` gap (the candidates ``diag.closers`` close half the calibration gap but none predicts the
+      held-out coreflood well enough to be declared, i.e. weakly identified): the base model itself
+      (:data:`BASE_HYPOTHESIS`) and the first step's refits of the first :data:`MAX_UNATTRIBUTED` closers;
+
+    empty otherwise (nothing to separate)."""
+    if diag.verdict == "unattributed" and diag.closers:
+        names = diag.closers[:MAX_UNATTRIBUTED]
+        return {BASE_HYPOTHESIS: diag.base_fit} | {n: diag.steps[0].fits[n] for n in names}
     names = list(diag.ambiguity)
     if len(names) < 2:
         return {}
@@ -62,7 +82,8 @@ def competing_fits(diag: GapDiagnosis) -> dict:
 
 
 def propose_next_experiment(diag: GapDiagnosis, directory, *, parallel=None, log=None) -> NextExperiment | None:
-    """Rank the next corefloods for ``diag``'s ambiguity set and write the best one into ``directory``:
+    """Rank the next corefloods for ``diag``'s competing hypotheses (:func:`competing_fits`) and write the best one
+    into ``directory``:
     ``next_experiment.toml`` (schedule file), ``next_experiment.json`` (rationale) and
     ``next_experiment_study.toml`` (a predict-role study experiment on the reference core). ``None`` when the
     verdict leaves nothing to separate."""
