@@ -3,8 +3,10 @@
 Each command runs in a fresh interpreter ``--repeat`` times; the table gives the median wall time, the number of
 modules in ``sys.modules`` at exit and which heavy libraries (numba, SciPy's optimisers, pymoo, GPy, chaospy, SALib,
 ArviZ, matplotlib, emcee, scikit-learn, moocore) were imported. Baselines measured in the same run: an empty
-interpreter, ``import xarray`` and ``import xarray`` + opening one stored result (what ``spflow status`` does per node
-to check a cached entry against its stage's schema: its floor). ``spflow status`` runs on a small pipeline
+interpreter, ``import xarray``, ``import xarray`` + opening one stored result (what ``spflow status`` did per node to
+check a cached entry against its stage's schema until it read the header instead: xarray's decoding of a string
+variable imports dask when installed) and ``import xarray`` + reading one stored result's header
+(:func:`spflow.core.netcdf_layout.read_layout`, what it does now: its floor). ``spflow status`` runs on a small pipeline
 (parameter_space -> lhs_design -> forward on 10 cells -> pce) computed once into a temporary cache first (its cold run
 time is printed, not part of the table). Target (issue #23): ``spflow list`` and ``spflow status`` <= 1.5 s wall on
 the 2-core machine.
@@ -87,6 +89,8 @@ def main() -> None:
             ("import xarray", "import xarray"),
             ("import xarray + open one stored result",
              f"import xarray\nxarray.open_dataset({str(entry)!r}, engine='netcdf4').close()"),
+            ("import xarray + read one stored header",
+             f"import xarray\nfrom spflow.core.netcdf_layout import read_layout\nread_layout({str(entry)!r})"),
             ("import spflow", "import spflow"),
             ("spflow --help", "from spflow.cli import build_parser\nbuild_parser().format_help()"),
             ("spflow list", cli("list")),

@@ -40,6 +40,7 @@ import xarray as xr
 
 from .errors import CacheError, SchemaError
 from .locks import FileLock
+from .netcdf_layout import DatasetLayout, read_layout
 
 __all__ = ["Store", "CorruptEntryError", "MARKER", "STORE_FORMAT"]
 
@@ -232,11 +233,16 @@ class Store:
         with xr.open_dataset(self._entry(key) / "data.nc", engine="netcdf4") as ds:
             return ds.load()
 
-    @contextlib.contextmanager
-    def opened(self, key: str) -> Iterator[xr.Dataset]:
-        """The entry's Dataset opened lazily (dims, variables and attributes without reading the arrays)."""
-        with xr.open_dataset(self._entry(key) / "data.nc", engine="netcdf4") as ds:
-            yield ds
+    def layout(self, key: str) -> DatasetLayout:
+        """The entry's dims, variables (dims, dtypes, attributes) and attributes, without reading the arrays: from the
+        file's header (:func:`~spflow.core.netcdf_layout.read_layout`), or, for an encoding the header reader leaves
+        to xarray, from the Dataset xarray opens lazily. Raises ``OSError``/``ValueError`` if it cannot be read."""
+        data = self._entry(key) / "data.nc"
+        found = read_layout(data)
+        if found is not None:
+            return found
+        with xr.open_dataset(data, engine="netcdf4") as ds:
+            return DatasetLayout.of(ds)
 
     def save(self, key: str, ds: xr.Dataset, meta: dict[str, Any], *, where: str) -> None:
         """Write ``ds`` and its metadata atomically under ``key``'s lock; an existing complete entry is kept as is.

@@ -389,8 +389,7 @@ def _entry_problem(store: Store, key: str, stage: Stage) -> str | None:
                 f"of stage {stage.name!r}")
     if stage.output is not None:
         try:
-            with store.opened(key) as ds:
-                stage.output.validate(ds, stage=stage.name, port="output", values=False)
+            stage.output.validate(store.layout(key), stage=stage.name, port="output", values=False)
         except SchemaError as exc:
             return f"does not match the output schema of its stage ({exc})"
         except (OSError, ValueError, RuntimeError) as exc:

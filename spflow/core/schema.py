@@ -19,6 +19,7 @@ import xarray as xr
 
 from .cf_metadata import UNITS_VARIABLE, has_units_per_element, udunits
 from .errors import SchemaError
+from .netcdf_layout import DatasetLayout
 
 __all__ = ["Variable", "DatasetSchema", "ANY"]
 
@@ -63,10 +64,13 @@ class DatasetSchema:
 
     def validate(self, ds: Any, *, stage: str, port: str, values: bool = True) -> None:
         """Raise :class:`SchemaError` if ``ds`` does not match; ``values=False`` checks the structure only (dims,
-        variables, dtypes, units, attrs) without reading the arrays (the finiteness check), e.g. on a lazily opened
-        cache entry."""
+        variables, dtypes, units, attrs) without reading the arrays (the finiteness check). ``ds`` is an
+        ``xarray.Dataset`` or, with ``values=False``, the :class:`~spflow.core.netcdf_layout.DatasetLayout` of a
+        stored one (a cache entry, read from its header)."""
         where = f"stage {stage!r} port {port!r}"
-        if not isinstance(ds, xr.Dataset):
+        if isinstance(ds, DatasetLayout) and values:
+            raise ValueError(f"{where}: a DatasetLayout holds no values; validate it with values=False")
+        if not isinstance(ds, (xr.Dataset, DatasetLayout)):
             raise SchemaError(f"{where}: expected an xarray.Dataset, found {type(ds).__name__}")
         missing_dims = [d for d in self.dims if d not in ds.dims]
         if missing_dims:
@@ -82,7 +86,7 @@ class DatasetSchema:
                         f"found none (variables: {sorted(map(str, ds.variables))})"
                     )
                 continue
-            var = ds[name]
+            var = ds.variables[name]
             if spec.dims is not None and tuple(var.dims) != tuple(spec.dims):
                 raise SchemaError(f"{where} variable {name!r}: expected dims {spec.dims}, found {tuple(var.dims)}")
             if var.dtype.kind not in spec.kind:
@@ -102,16 +106,16 @@ class DatasetSchema:
                 raise SchemaError(f"{where} variable {name!r}: expected finite values, found NaN or inf")
 
     @staticmethod
-    def _check_units_variable(ds: xr.Dataset, name: str, expected: str, where: str) -> None:
-        found = ds[name].attrs.get(UNITS_VARIABLE)
+    def _check_units_variable(ds: xr.Dataset | DatasetLayout, name: str, expected: str, where: str) -> None:
+        found = ds.variables[name].attrs.get(UNITS_VARIABLE)
         if found != expected:
             raise SchemaError(f"{where} variable {name!r}: expected attrs[{UNITS_VARIABLE!r}] = {expected!r} (units "
                               f"per element), found {found!r}")
         if not has_units_per_element(ds, name):
             units = ds.variables.get(expected)
             raise SchemaError(f"{where} variable {name!r}: units per element need no attrs['units'] (found "
-                              f"{ds[name].attrs.get('units')!r}) and {expected!r} a string variable along some of its "
-                              f"dims {tuple(ds[name].dims)} (found "
+                              f"{ds.variables[name].attrs.get('units')!r}) and {expected!r} a string variable along "
+                              f"some of its dims {tuple(ds.variables[name].dims)} (found "
                               f"{None if units is None else (units.dims, str(units.dtype))})")
 
     def annotate(self, ds: xr.Dataset) -> xr.Dataset:

@@ -22,8 +22,10 @@ HEAVY = ("numba", "pymoo", "GPy", "chaospy", "SALib", "arviz", "matplotlib", "em
 #: descriptions: light, since they import SciPy when a model is fitted.)
 NOT_FOR_LIST = ("scipy", "joblib", "networkx", "dask", "spflow.core.executor")
 #: What ``spflow status`` on a pipeline without Kriging does not need: the Kriging modules (surrogate kinds are
-#: registered by reference), SciPy's linear algebra they import, joblib and the stages its pipeline does not use.
-NOT_FOR_STATUS = ("joblib", "scipy.linalg", "spflow.plugins.surrogates.gp_model", "spflow.plugins.surrogates.pck_model",
+#: registered by reference), SciPy's linear algebra they import, joblib, the stages its pipeline does not use, and
+#: dask (which xarray imports, when installed, to open a file holding strings: the schema check of a cached entry
+#: reads the netCDF header instead, spflow.core.netcdf_layout).
+NOT_FOR_STATUS = ("dask", "joblib", "scipy.linalg", "spflow.plugins.surrogates.gp_model", "spflow.plugins.surrogates.pck_model",
                   "spflow.plugins.surrogates.kriging", "spflow.plugins.slug_design.stage")
 
 
