@@ -73,8 +73,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     _p("C50", "meq/ml", 0.145, 0.0, 5.0, _CORE, "initial anion concentration of the connate brine (Table 2.1)"),
     _p("C60", "meq/ml", 0.0097, 0.0, 5.0, _CORE, "initial divalent-cation concentration (Table 2.1)"),
     # --- fluids ---
-    _p("VIS1", "cP", 1.0, 0.01, 1.0e3, _FLUID, "water (brine) viscosity (Table 2.1)"),
-    _p("VIS2", "cP", 13.8, 0.01, 1.0e5, _FLUID, "oil viscosity (Table 2.1)"),
+    _p("VIS1", "cP", 1.0, 0.1, 10.0, _FLUID, "water (brine) viscosity (Table 2.1; bounds: IAPWS water, brines)"),
+    _p("VIS2", "cP", 13.8, 0.1, 1.0e5, _FLUID, "oil viscosity (Table 2.1; lower bound: a liquid oil)"),
     _p("XIFTW", "log10(dyne/cm)", 1.32, -3.0, 2.5, _IFT, "log10 of the oil-water IFT (Table 2.4)"),
     # --- polymer viscosity ---
     _p("AP1", "(wt%)^-1", 15.0, 0.0, 1.0e4, _PVIS, "Flory-Huggins coefficient of Cp (Table 2.4)"),
