@@ -160,6 +160,31 @@ def run_case(case: dict, max_wall_s: float | None = None, capillary: str = "expl
     return out
 
 
+def load_saved(path: str, cases: list[dict]) -> dict[int, dict]:
+    """The runs saved in ``path`` (``--save``), by draw index, checked against this seed's ``cases``. A last line
+    cut short by an interrupted write is dropped from the file (that draw runs again); any other unreadable line, or
+    a draw that differs from this seed/N, stops with a message naming the file and the line."""
+    with open(path) as fh:
+        lines = fh.readlines()
+    if lines and not lines[-1].endswith("\n"):
+        print(f"{path}: dropping its last line, cut short by the interrupted run ({len(lines[-1])} characters)")
+        lines = lines[:-1]
+        with open(path, "w") as fh:
+            fh.writelines(lines)
+    done = {}
+    for number, line in enumerate(lines, start=1):
+        try:
+            row = json.loads(line)
+            index, case, result = int(row["index"]), row["case"], row["result"]
+        except (ValueError, KeyError, TypeError) as err:
+            raise SystemExit(f"{path}, line {number}: not a saved run ({err}); not resuming") from None
+        if not 0 <= index < len(cases) or case != cases[index]:
+            raise SystemExit(f"{path}, line {number}: draw {index} is not draw {index} of this seed and N "
+                             f"({len(cases)} draws); not resuming")
+        done[index] = result
+    return done
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-n", type=int, default=10000, help="number of draws")
@@ -184,14 +209,8 @@ def main() -> None:
     cases = [case for case, _ in drawn]
     rejected = sum(r for _, r in drawn)
     indices = [int(k) for k in args.draws.split(",")] if args.draws else list(range(args.n))
-    done = {}
-    if args.resume and os.path.exists(args.save):
-        with open(args.save) as fh:
-            for line in fh:
-                row = json.loads(line)
-                if row["case"] != cases[row["index"]]:
-                    raise SystemExit(f"{args.save}: draw {row['index']} differs from this seed/N; not resuming")
-                done[row["index"]] = row["result"]
+    done = load_saved(args.save, cases) if args.resume and os.path.exists(args.save) else {}
+    if args.resume:
         print(f"resuming: {len(done)} runs already in {args.save}")
     todo = [k for k in indices if k not in done]
     simulate("BCF1", cells=30)  # compile / load the cached kernel

@@ -35,6 +35,20 @@ def test_out_of_range_parameter_names_field_and_range(name, value):
     assert "out of range" in msg and "[" in msg and "]" in msg
 
 
+@pytest.mark.parametrize("name,value", [("VIS1", 0.0118), ("VIS1", 327.0), ("VIS2", 0.0117)])
+def test_unphysical_fluid_viscosity_names_field_and_physical_range(name, value):
+    """Issue-22 stress draws: a 0.0118 cP and a 327 cP "brine", a 0.0117 cP (gas-like) "oil"."""
+    msg = _raises(name, resolve_params, {name: value})
+    assert {"VIS1": "[0.1, 10] cP", "VIS2": "[0.1, 100000] cP"}[name] in msg
+
+
+@pytest.mark.parametrize("name,value", [("VIS1", 1.7912), ("VIS1", 0.1346), ("VIS1", 3.0), ("VIS2", 0.30)])
+def test_physical_fluid_viscosities_are_accepted(name, value):
+    """Handbook fluids inside the bounds: water at 0.01 and 200 C (IAPWS 2008), a 4 mol/kg CaCl2 brine at 30 C
+    (~3 mPa s), n-hexane at 25 C (0.30 mPa s)."""
+    assert resolve_params({name: value})[name] == value
+
+
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
 def test_non_finite_parameter(value):
     msg = _raises("AD31", resolve_params, {"AD31": value})

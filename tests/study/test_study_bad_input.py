@@ -66,7 +66,7 @@ CASES = {
     "core data as fixed": (_edit("VIS2 = 13.8", "VIS2 = 13.8\nLENGTH = 0.3"), None, STUDY_FILE,
                            ["[parameters.fixed] ['LENGTH']", "[experiment.core]"]),
     "fixed out of bounds": (_edit("VIS2 = 13.8", "VIS2 = -1.0"), None, STUDY_FILE,
-                            ["VIS2", "allowed [0.01, 100000] cP"]),
+                            ["VIS2", "allowed [0.1, 100000] cP"]),
     "unknown effect": (_edit("capillary_pressure = 0.0", "capilary_pressure = 0.0"), None, STUDY_FILE,
                        ["[effects]", "unknown effect 'capilary_pressure'", "known effects:"]),
     "effect out of range": (_edit("capillary_pressure = 0.0", "capillary_pressure = 50.0"), None, STUDY_FILE,

@@ -3,7 +3,9 @@
 Defaults are the thesis's calibrated set (Table 2.4) with the fluid data of Table 2.1 and the core data of
 Tables 2.2-2.3; where the thesis is silent a Berea-typical value is chosen. Each choice and its source is listed in
 ``docs/forward_model.md``. Bounds are physical limits, wide enough to contain the prior ranges of Tables 3.1, 3.2
-and 4.1. Dispersivities are in ft, the thesis's unit (Fig. 2.9).
+and 4.1. Dispersivities are in ft, the thesis's unit (Fig. 2.9). The fluid viscosities are bounded by what
+brines (``VIS1`` 0.1-10 cP: IAPWS water, chloride brines) and liquid oils (``VIS2`` >= 0.1 cP) reach; sources in
+the same file.
 
 ``resolve_params`` merges user values with the defaults and validates them before any work: unknown names (with
 close-match suggestions), non-numbers (strings are not coerced), NaN/inf, values outside their bounds and
@@ -73,8 +75,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     _p("C50", "meq/ml", 0.145, 0.0, 5.0, _CORE, "initial anion concentration of the connate brine (Table 2.1)"),
     _p("C60", "meq/ml", 0.0097, 0.0, 5.0, _CORE, "initial divalent-cation concentration (Table 2.1)"),
     # --- fluids ---
-    _p("VIS1", "cP", 1.0, 0.01, 1.0e3, _FLUID, "water (brine) viscosity (Table 2.1)"),
-    _p("VIS2", "cP", 13.8, 0.01, 1.0e5, _FLUID, "oil viscosity (Table 2.1)"),
+    _p("VIS1", "cP", 1.0, 0.1, 10.0, _FLUID, "water (brine) viscosity (Table 2.1)"),
+    _p("VIS2", "cP", 13.8, 0.1, 1.0e5, _FLUID, "oil viscosity (Table 2.1)"),
     _p("XIFTW", "log10(dyne/cm)", 1.32, -3.0, 2.5, _IFT, "log10 of the oil-water IFT (Table 2.4)"),
     # --- polymer viscosity ---
     _p("AP1", "(wt%)^-1", 15.0, 0.0, 1.0e4, _PVIS, "Flory-Huggins coefficient of Cp (Table 2.4)"),
