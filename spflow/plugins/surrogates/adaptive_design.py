@@ -43,8 +43,8 @@ _FORWARD_PARAMS = ("experiments", "fixed", "effects", "cells", "pv_step", "schem
 class AdaptivePCE(Stage):
     name = "adaptive_pce"
     # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance; 3: + UDUNITS units per
-    # element; 4: the space's marginals honoured and recorded (issue #24)
-    version = "4"
+    # element; 4: the space's marginals honoured and recorded (issue #24); 5: default degree_max 20 (was 15)
+    version = "5"
     description = "PCE proxy on a growing LHS design until the mean LOO error settles (Algorithm 2)"
     inputs = {"space": SPACE}
     output = STORED_SURROGATE

@@ -62,8 +62,9 @@ def check_lists(stage: str, params) -> None:
 class PCEStage(Stage):
     name = "pce"
     # 2: degree cap 15 + basis-size limit, corrected LOO as the error variance, degree_cap attrs; 3: + UDUNITS units
-    # per element; 4: the space's marginals honoured and recorded (distribution, distribution_parameters; issue #24)
-    version = "4"
+    # per element; 4: the space's marginals honoured and recorded (distribution, distribution_parameters; issue #24);
+    # 5: default degree_max 20 (was 15)
+    version = "5"
     description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
     output = STORED_SURROGATE
