@@ -7,7 +7,6 @@ import pytest
 from numpy.polynomial import legendre
 
 from spflow.core.errors import ParameterError
-from spflow.plugins.surrogates.degree_adaptive import fit_pce
 from spflow.plugins.surrogates.outputs import OutputIndex
 from spflow.plugins.surrogates.pce_cross_validation import FOLD_SEED, kfold_error
 from spflow.plugins.surrogates.pce_model import PCE
