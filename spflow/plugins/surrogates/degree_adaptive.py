@@ -31,8 +31,8 @@ Stopping rules (UQLab defaults):
 The thesis capped the degree at 5; that default stalled on smooth but strongly non-linear responses (issue #24:
 Ishigami ε_val ≈ 0.25 at every N), so the search now goes on while the corrected LOO improves. A cap of 15 still held
 Ishigami at the truncation error of a degree-15 sine expansion (ε_val ≈ 1.4e-11 at N = 400); with 20 it reaches
-1.9e-16 (where the LARS path ends, :mod:`.lars`), and on the 8- and 9-input benchmark problems the basis-size limit
-binds first (p <= 7), so 20 changes nothing there (docs/surrogates.md, Benchmark against peers).
+8.9e-20, and on the 8- and 9-input benchmark problems the basis-size limit binds first (p <= 7), so 20 changes
+nothing there (docs/surrogates.md, Benchmark against peers).
 
 OLS needs more points than terms (otherwise T(P, N) = ∞, :func:`.regression.loo_correction`), so such bases score ∞
 without being fitted. The fits run on one BLAS thread (:mod:`.blas`; the matrices are at most a few thousand rows).
