@@ -30,7 +30,8 @@ Columns (medians over the output columns of a fit, then over the seeds):
 * ``eps_val``: validation error, mean squared error / variance of the validation outputs (the form of Eq. 3.8);
   columns whose validation outputs are constant up to round-off are not scored;
 * ``LOO/eps``: the method's own leave-one-out estimate divided by ``eps_val``. spflow PCE: the error the model
-  reports for a calibration (``PCE.error_variance / output_variance``); spflow GP/PCK: their Kriging (Dubrule) LOO;
+  reports for a calibration (``PCE.error_variance / output_variance``: the corrected LOO; ``spflow_cv``, the same
+  fit with ``cv_folds=10``: the 10-fold cross-validation error of the whole adaptive fit); spflow GP/PCK: their Kriging (Dubrule) LOO;
   OpenTURNS: the corrected LOO of the selected basis (the smallest entry of ``getErrorHistory``); chaospy: the plain
   LOO of the OLS fit from its hat matrix (chaospy has no error estimate; computed here); scikit-learn: the
   closed-form LOO of the fitted GP (computed here);
@@ -85,18 +86,22 @@ def relative_errors(prediction: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.where(is_constant(truth), np.nan, error / np.where(spread > 0, spread, 1.0))
 
 
-def fit_spflow(x, y, lower, upper, xv):
-    """spflow's default sparse PCE, all columns of ``y`` (n, m) in one fit (they share the degree and q)."""
-    outputs = OutputIndex.of_array(y.shape[1])
-    names = [f"x{k}" for k in range(x.shape[1])]
-    start = time.process_time()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the degree-cap warning is counted from the model's attrs instead
-        model = PCE.fit(names, lower, upper, outputs, x, y, solver="lars")
-    cpu = time.process_time() - start
-    with np.errstate(divide="ignore", invalid="ignore"):
-        reported = model.error_variance / model.output_variance
-    return model.predict(xv)[0], reported, cpu, model.info["degree"]
+def fit_spflow(**options):
+    """spflow's default sparse PCE with ``options`` over its defaults, all columns of ``y`` (n, m) in one fit (they
+    share the degree and q); its error estimate is the one it reports (the corrected LOO, or the K-fold
+    cross-validation error of the whole fit with ``cv_folds``)."""
+    def fit(x, y, lower, upper, xv):
+        outputs = OutputIndex.of_array(y.shape[1])
+        names = [f"x{k}" for k in range(x.shape[1])]
+        start = time.process_time()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the degree-cap warning is counted from the model's attrs instead
+            model = PCE.fit(names, lower, upper, outputs, x, y, solver="lars", **options)
+        cpu = time.process_time() - start
+        with np.errstate(divide="ignore", invalid="ignore"):
+            reported = model.error_variance / model.output_variance
+        return model.predict(xv)[0], reported, cpu, model.info["degree"]
+    return fit
 
 
 def ot_basis(d: int, n: int) -> tuple[int, int]:
@@ -212,7 +217,8 @@ def fit_sklearn_gp(kernel: str):
     return fit
 
 
-METHODS = {"spflow": fit_spflow, "openturns": fit_openturns, "chaospy": fit_chaospy,
+METHODS = {"spflow": fit_spflow(), "spflow_cv": fit_spflow(cv_folds=10), "openturns": fit_openturns,
+           "chaospy": fit_chaospy,
            "spflow_gp": fit_spflow_kriging(GP), "spflow_gp_matern": fit_spflow_kriging(GP, kernel="matern52"),
            "spflow_pck": fit_spflow_kriging(PCK), "sklearn_gp_rbf": fit_sklearn_gp("rbf"),
            "sklearn_gp_matern": fit_sklearn_gp("matern52")}

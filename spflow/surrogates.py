@@ -226,32 +226,34 @@ class PCE(_TrendSobol, SurrogateRegressor):
 
     Options as :func:`spflow.plugins.surrogates.degree_adaptive.fit_pce` and the ``pce`` stage: ``degree_max``
     (largest total degree tried), ``q`` (hyperbolic truncation), ``solver`` (``"ols"`` or sparse ``"lars"``),
-    ``target_loo`` (stop once the corrected LOO is below it), ``max_terms_ratio`` (candidate terms per run);
-    ``n_jobs`` spreads the per-output LARS fits. A fit that ends at the degree cap warns
+    ``target_loo`` (stop once the corrected LOO is below it), ``max_terms_ratio`` (candidate terms per run),
+    ``cv_folds`` (0, or K >= 2 for K-fold cross-validation of the whole fit as the reported error); ``n_jobs`` spreads
+    the per-output LARS fits. A fit that ends at the degree cap warns
     (:class:`~spflow.core.errors.DegreeCapWarning`).
 
-    ``predict(X, return_std=True)``'s std is the corrected LOO estimate of the proxy error, sqrt(ε*_LOO · Var̂(y)),
-    constant in X (a PCE has no pointwise error model). ``loo_error_`` is that corrected LOO ε*_LOO (Blatman & Sudret
-    2011), the estimate of the relative validation error. ``sobol_indices()``: first and total indices from the
-    coefficients (Sudret 2008); ``model_.moments()`` the mean and variance.
+    ``predict(X, return_std=True)``'s std is the reported estimate of the proxy error, sqrt(ε · Var̂(y)), constant
+    in X (a PCE has no pointwise error model). ``loo_error_`` is that ε, the estimate of the relative validation
+    error: the corrected LOO ε*_LOO (Blatman & Sudret 2011) by default, the K-fold cross-validation error of the whole
+    adaptive fit with ``cv_folds = K`` (``model_.info["error_estimate"]`` says which). ``sobol_indices()``: first
+    and total indices from the coefficients (Sudret 2008); ``model_.moments()`` the mean and variance.
     """
 
     def __init__(self, bounds=None, *, inputs=None, names=None, degree_max: int = DEGREE_MAX, q: float = 0.9,
                  solver: str = "ols", target_loo: float = 0.0, max_terms_ratio: float = MAX_TERMS_RATIO,
-                 n_jobs: int = 1):
+                 cv_folds: int = 0, n_jobs: int = 1):
         self.bounds, self.inputs, self.names = bounds, inputs, names
         self.degree_max, self.q, self.solver, self.target_loo = degree_max, q, solver, target_loo
-        self.max_terms_ratio, self.n_jobs = max_terms_ratio, n_jobs
+        self.max_terms_ratio, self.cv_folds, self.n_jobs = max_terms_ratio, cv_folds, n_jobs
 
     def _fit_model(self, names, lower, upper, outputs, X, y, inputs) -> Surrogate:
         from spflow.plugins.surrogates.pce_model import PCE as PCEModel
 
         return PCEModel.fit(names, lower, upper, outputs, X, y, inputs=inputs, degree_max=self.degree_max, q=self.q,
                             solver=self.solver, target_loo=self.target_loo, max_terms_ratio=self.max_terms_ratio,
-                            parallel=self._parallel())
+                            cv_folds=self.cv_folds, parallel=self._parallel())
 
     def _loo(self) -> np.ndarray:
-        return self._fitted().modified_loo
+        return self._fitted().reported_error
 
 
 class _Kriging(SurrogateRegressor):

@@ -29,6 +29,21 @@ def test_recovers_exact_support_of_sparse_polynomial(seed):
     assert result.modified_loo < 1e-20
 
 
+@pytest.mark.parametrize("scale", [1e-12, 1e-6, 1e6])
+def test_recovers_a_sparse_polynomial_whatever_the_units_of_y(scale):
+    """scikit-learn's path stops on an absolute threshold (1.2e-7 in y's units); the ranking must not see the units:
+    the same polynomial in 'small' or 'large' units is recovered term for term (before the fix, 1e-12 gave the
+    constant alone)."""
+    psi = _basis(seed=3)
+    rng = np.random.default_rng(13)
+    support = np.concatenate([[0], rng.choice(np.arange(1, psi.shape[1]), 6, replace=False)])
+    truth = np.zeros(psi.shape[1])
+    truth[support] = scale * rng.choice([-1, 1], support.size) * rng.uniform(0.5, 2.0, support.size)
+    result = hybrid_lars(psi, psi @ truth)
+    assert sorted(result.active) == sorted(support)
+    np.testing.assert_allclose(result.coefficients, truth, rtol=0, atol=1e-10 * scale)
+
+
 def test_selected_model_is_the_ols_refit_with_its_errors():
     psi = _basis(seed=4)
     z1 = psi[:, 1]

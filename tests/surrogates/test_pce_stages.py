@@ -173,3 +173,23 @@ def test_pce_stage_reports_the_degrees_it_tries():
     PCEStage(variables=["dp"], experiments=["BCF1"], degree_max=3, solver="ols").run(
         ctx, space=_space(), design=_design(x), responses=_responses(x))
     assert reports[0] == ("pce", 1, 3, "degrees") and reports[-1] == ("pce", 3, 3, "degrees")
+
+
+def test_pce_stage_cross_validates_on_request():
+    """Exact quadratic responses: every fold's fit (24 of the 30 runs) reproduces them, so the 5-fold error of the
+    whole fit is zero to round-off, and it is what the stored model reports; the folds' fits report no progress."""
+    x = _points(30, 0)
+    reports = {0: [], 5: []}
+    for folds in reports:
+        ctx = StageContext(node="pce", verbose=False, report=lambda *report, f=folds: reports[f].append(report))
+        ds = PCEStage(variables=["dp"], experiments=["BCF1"], degree_max=3, solver="ols", cv_folds=folds).run(
+            ctx, space=_space(), design=_design(x), responses=_responses(x))
+    assert ds.attrs["error_estimate"] == "kfold_cv" and ds.attrs["cv_folds"] == 5
+    assert np.all(ds["cv_error"].values < 1e-20)
+    model = load_surrogate(ds)
+    assert np.array_equal(model.predict(x[:2])[1], np.broadcast_to(ds["cv_error"].values * ds["output_variance"].values,
+                                                                   (2, ds.sizes["output"])))
+    assert reports[5] == reports[0]
+    with pytest.raises(ParameterError, match=r"cv_folds = 31 exceeds the N = 30 training runs"):
+        PCEStage(variables=["dp"], experiments=["BCF1"], cv_folds=31).run(
+            CTX, space=_space(), design=_design(x), responses=_responses(x))

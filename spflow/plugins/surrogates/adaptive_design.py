@@ -32,7 +32,7 @@ from spflow.plugins.forward.stage import Forward
 
 from .contract import STORED_SURROGATE, with_parameter_units
 from .pce_model import PCE
-from .pce_stage import PCE_PARAMS, check_lists, fit_options
+from .pce_stage import PCE_PARAMS, check_cv_folds, check_lists, fit_options
 from .training_data import training_set
 
 __all__ = ["AdaptivePCE"]
@@ -43,8 +43,9 @@ _FORWARD_PARAMS = ("experiments", "fixed", "effects", "cells", "pv_step", "schem
 class AdaptivePCE(Stage):
     name = "adaptive_pce"
     # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance; 3: + UDUNITS units per
-    # element; 4: the space's marginals honoured and recorded (issue #24)
-    version = "4"
+    # element; 4: the space's marginals honoured and recorded (issue #24); 5: default degree_max 20 (was 15); 6: the
+    # pce stage's cv_folds (attrs cv_folds, error_estimate) and LARS path scaled to the output (lars.PATH_SCALE)
+    version = "6"
     description = "PCE proxy on a growing LHS design until the mean LOO error settles (Algorithm 2)"
     inputs = {"space": SPACE}
     output = STORED_SURROGATE
@@ -65,6 +66,7 @@ class AdaptivePCE(Stage):
         super().__init__(**params)
         self._names = [e.name for e in forward_experiments(self.params["experiments"], self.params["fixed"])]
         check_lists(self.name, self.params | {"experiments": self._names})
+        check_cv_folds(self.name, self.params)
         if self.params["n_initial"] > self.params["n_max"]:
             raise ParameterError(f"stage 'adaptive_pce': n_initial = {self.params['n_initial']} exceeds n_max = "
                                  f"{self.params['n_max']}")

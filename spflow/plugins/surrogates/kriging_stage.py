@@ -63,8 +63,9 @@ class _KrigingStage(Stage):
 class PCKStage(_KrigingStage):
     name = "pck"
     # 2: the trend's hybrid LARS ranks by the LASSO-modified path (issue #24); 3: + UDUNITS units per element; 4: the
-    # space's marginals honoured and recorded (issue #24); 5: nugget 1e-8 -> 1e-12, length scales up to 10^4 (#24)
-    version = "5"
+    # space's marginals honoured and recorded (issue #24); 5: nugget 1e-8 -> 1e-12, length scales up to 10^4 (#24);
+    # 6: the trend's LARS path scaled to the output (lars.PATH_SCALE: small-valued outputs were cut short)
+    version = "6"
     description = "PC-Kriging proxy (universal Kriging on a hybrid-LARS polynomial-chaos trend, ML length scales)"
     params = {
         **KRIGING_PARAMS,

@@ -45,7 +45,15 @@ from spflow.core.errors import ParameterError
 from .blas import single_threaded_blas
 from .regression import is_constant, loo_correction, relative_errors
 
-__all__ = ["LarsResult", "hybrid_lars", "hybrid_lars_outputs"]
+__all__ = ["LarsResult", "hybrid_lars", "hybrid_lars_outputs", "PATH_SCALE"]
+
+#: Standard deviation the centred output is scaled to before ranking. scikit-learn ends a LARS path once the largest
+#: correlation of the residual with a regressor, divided by N, is below float32's epsilon (1.2e-7) *in the units of y*:
+#: unscaled, an output of standard deviation 1e-8 got no regressor at all (ε_val = 1), and Ishigami's (std 3.7) path
+#: ended at a relative RMS residual of ~1e-8 (ε_val ~1e-16 at p = 18-20, where OpenTURNS reaches 1e-19). At a standard
+#: deviation of 1e8 that threshold is a relative residual of ~1e-15, the round-off of y. The ranking itself does not
+#: depend on the scale.
+PATH_SCALE = 1e8
 
 
 @dataclass(frozen=True)
@@ -91,9 +99,10 @@ class _Regressors:
 
     def path(self, y: np.ndarray) -> np.ndarray:
         """Columns of Ψ ranked by entry into the final LASSO-LARS active set (at most ``max_steps`` path steps)."""
-        yc = y - y.mean()
         if self.max_steps == 0 or is_constant(y[:, None])[0]:
             return np.zeros(0, dtype=np.int64)
+        yc = y - y.mean()
+        yc *= PATH_SCALE / yc.std()  # the path's stopping threshold is absolute (PATH_SCALE)
         with warnings.catch_warnings():
             # the path stops by itself once the residual is numerically zero (exact fit); that is not an error here
             warnings.simplefilter("ignore", ConvergenceWarning)
