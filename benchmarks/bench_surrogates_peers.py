@@ -30,10 +30,10 @@ Columns (medians over the output columns of a fit, then over the seeds):
 * ``eps_val``: validation error, mean squared error / variance of the validation outputs (the form of Eq. 3.8);
   columns whose validation outputs are constant up to round-off are not scored;
 * ``LOO/eps``: the method's own leave-one-out estimate divided by ``eps_val``. spflow PCE: the error the model
-  reports for a calibration (``PCE.error_variance / output_variance``: the corrected LOO; ``spflow_cv``, the same
-  fit with ``cv_folds=10``: the 10-fold cross-validation error of the whole adaptive fit); spflow GP/PCK: their Kriging (Dubrule) LOO;
-  OpenTURNS: the corrected LOO of the selected basis (the smallest entry of ``getErrorHistory``); chaospy: the plain
-  LOO of the OLS fit from its hat matrix (chaospy has no error estimate; computed here); scikit-learn: the
+  reports for a calibration (``PCE.error_variance / output_variance``: the corrected LOO; ``spflow_cv``, the same fit
+  with ``cv_folds=10``: the 10-fold cross-validation error of the whole adaptive fit); spflow GP/PCK: their Kriging
+  (Dubrule) LOO; OpenTURNS: the corrected LOO of the selected basis (the smallest entry of ``getErrorHistory``);
+  chaospy: the plain LOO of the OLS fit from its hat matrix (chaospy has no error estimate; computed here); scikit-learn: the
   closed-form LOO of the fitted GP (computed here);
 * ``fit CPU``: process CPU time of the fit of all columns, seconds (the peers' own threads included);
 * ``p``: the median selected (spflow) or fixed (peers) total degree of a PCE ("-" for Kriging).

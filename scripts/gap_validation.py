@@ -25,14 +25,14 @@ twins, so a long study can be stopped and resumed); the report (``docs/gap_valid
 ``docs/figures/<report name>_power_*.png``) is rebuilt from all results.
 
 **Second phase: the proposed next experiment** (``--next-experiment``, issue 20). For every finished twin whose
-diagnosis is ambiguous (its final ambiguity set holds two or more candidates, :func:`is_ambiguous`) or
-unattributed (candidates close the calibration gap, none is declared: the proposal then separates the base model
-from them; :func:`needs_next_experiment`) the twin is regenerated from its record's scenario and seed, diagnosed again to obtain the diagnosis object,
-``spflow.plugins.gap.next_after_diagnosis.propose_next_experiment`` ranks the corefloods a lab could run next on
-the twin's core, and the truth's coreflood on the best design (same measurement chain, noise seed ``seed + 2``)
-is added as a second calibration coreflood before the twin is diagnosed once more (:func:`run_next_experiment`
-says why calibration; ``--added-as heldout`` scores it next to BCF2 instead). Results go to
-``<key>.next_experiment.jsonl`` (``..._heldout.jsonl``) next to the first phase's (resumable, like it) and the
+diagnosis is ambiguous (its final ambiguity set holds two or more candidates, :func:`is_ambiguous`) or unattributed
+(candidates close the calibration gap, none is declared: the proposal then separates the base model from them;
+:func:`needs_next_experiment`) the twin is regenerated from its record's scenario and seed, diagnosed again to obtain
+the diagnosis object, ``spflow.plugins.gap.next_after_diagnosis.propose_next_experiment`` ranks the corefloods a lab
+could run next on the twin's core, and the truth's coreflood on the best design (same measurement chain, noise seed
+``seed + 2``) is added as a second calibration coreflood before the twin is diagnosed once more
+(:func:`run_next_experiment` says why calibration; ``--added-as heldout`` scores it next to BCF2 instead). Results go
+to ``<key>.next_experiment.jsonl`` (``..._heldout.jsonl``) next to the first phase's (resumable, like it) and the
 proposals' files to ``next_experiment/<key>/<twin>/``; the report gets a section "after the proposed
 next experiment" per result set (before/after rates among the phase's twins, the study-wide metrics with their
 results substituted, predicted against realised decision accuracy), partial results included.
@@ -327,10 +327,10 @@ def run_next_experiment(record: dict, directory: Path, role: str = "calibration"
     The twin is regenerated from the record's scenario and seed (:func:`twin`: the same truth and the same two
     corefloods, bit for bit) and diagnosed again with the same options, which gives the :class:`GapDiagnosis` the
     proposal needs (the record holds only its summary; ``reproduces_first_phase`` says whether the verdict, the
-    accepted steps and the ambiguity set came out as recorded). ``propose_next_experiment`` ranks the design space
-    of BCF1 for its competing hypotheses (``competing_fits``) and writes the proposal into ``directory``; the
-    truth's coreflood on the best design is generated through the same measurement chain with noise seed ``seed + NEXT_SEED_OFFSET`` and
-    the twin is diagnosed again with it.
+    accepted steps and the ambiguity set came out as recorded). ``propose_next_experiment`` ranks the design space of
+    BCF1 for its competing hypotheses (``competing_fits``) and writes the proposal into ``directory``; the truth's
+    coreflood on the best design is generated through the same measurement chain with noise seed
+    ``seed + NEXT_SEED_OFFSET`` and the twin is diagnosed again with it.
 
     The new coreflood joins the **calibration** data (BCF1 + the new flood; BCF2 stays held out). That is what a
     lab does with a coreflood run to settle a question: every hypothesis is recalibrated on all the data measured,

@@ -25,8 +25,9 @@ NOT_FOR_LIST = ("scipy", "joblib", "networkx", "dask", "spflow.core.executor")
 #: registered by reference), SciPy's linear algebra they import, joblib, the stages its pipeline does not use, and
 #: dask (which xarray imports, when installed, to open a file holding strings: the schema check of a cached entry
 #: reads the netCDF header instead, spflow.core.netcdf_layout).
-NOT_FOR_STATUS = ("dask", "joblib", "scipy.linalg", "spflow.plugins.surrogates.gp_model", "spflow.plugins.surrogates.pck_model",
-                  "spflow.plugins.surrogates.kriging", "spflow.plugins.slug_design.stage")
+NOT_FOR_STATUS = ("dask", "joblib", "scipy.linalg", "spflow.plugins.surrogates.gp_model",
+                  "spflow.plugins.surrogates.pck_model", "spflow.plugins.surrogates.kriging",
+                  "spflow.plugins.slug_design.stage")
 
 
 def loaded_after(body: str, look_for: tuple[str, ...] = HEAVY, cwd: Path = REPO) -> dict:

@@ -20,12 +20,12 @@ Stopping rules (UQLab defaults):
   RMS error of 1e-10): an exact fit, whose further "improvements" are round-off and would otherwise carry the search
   to the cap;
 * the cap: ``degree_max`` (default 20, the largest allowed), and no basis with more than
-  max(``max_terms_ratio`` · N, :data:`MIN_TERMS`) candidate terms is built (defaults 10 and 1000: LARS's Gram matrix grows as the square of the basis, and a candidate
-  set ten times the number of runs already leaves LARS most of the degree's terms to choose from; below 1000 terms
-  the cost is a few milliseconds and the limit would only cut small designs short — on the 8-D G-function at N = 50
-  it kept p <= 4, ε_val 0.18 against 0.11 at p = 5); the degree loop ends at the first degree all of whose bases
-  exceed it. When the selected degree is the largest one the cap let the search try, the data may
-  have asked for more: a :class:`~spflow.core.errors.DegreeCapWarning` says so and :attr:`PCEFit.cap_warning` keeps
+  max(``max_terms_ratio`` · N, :data:`MIN_TERMS`) candidate terms is built (defaults 10 and 1000: LARS's Gram matrix
+  grows as the square of the basis, and a candidate set ten times the number of runs already leaves LARS most of the
+  degree's terms to choose from; below 1000 terms the cost is a few milliseconds and the limit would only cut small
+  designs short — on the 8-D G-function at N = 50 it kept p <= 4, ε_val 0.18 against 0.11 at p = 5); the degree
+  loop ends at the first degree all of whose bases exceed it. When the selected degree is the largest one the cap
+  let the search try, the data may have asked for more: a :class:`~spflow.core.errors.DegreeCapWarning` says so and :attr:`PCEFit.cap_warning` keeps
   the message (the ``pce`` stage stores it in ``attrs["degree_cap_warning"]``).
 
 The thesis capped the degree at 5; that default stalled on smooth but strongly non-linear responses (issue #24:
