@@ -292,8 +292,8 @@ def is_unattributed(record: dict) -> bool:
 
 def needs_next_experiment(record: dict) -> bool:
     """Whether a first-phase twin goes into the next-experiment phase: ambiguous (:func:`is_ambiguous`) or
-    unattributed (:func:`is_unattributed`) -- the verdicts for which ``propose_next_experiment`` can have competing
-    hypotheses (an unattributed verdict whose gap no candidate closes gets no proposal and keeps its result)."""
+    unattributed (:func:`is_unattributed`) -- the verdicts for which ``propose_next_experiment`` has competing
+    hypotheses."""
     return is_ambiguous(record) or is_unattributed(record)
 
 

@@ -445,6 +445,18 @@ def test_competing_fits_of_an_unattributed_gap_are_the_base_against_its_closers(
                                               base_fit=0)) == {}
 
 
+def test_hypotheses_source_names_the_closers_left_out():
+    from types import SimpleNamespace
+
+    from spflow.plugins.gap.next_after_diagnosis import hypotheses_source
+
+    five = SimpleNamespace(verdict="unattributed", closers=["d", "a", "e", "b", "c"])
+    assert hypotheses_source(five).endswith("the first 3 of the 5 candidates that close it (best held-out score "
+                                            "first); left out: b, c")
+    assert "left out" not in hypotheses_source(SimpleNamespace(verdict="unattributed", closers=["a", "b"]))
+    assert hypotheses_source(SimpleNamespace(verdict="ambiguous", closers=[])) == "the diagnosis's final ambiguity set"
+
+
 def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
     """An ambiguous verdict between the toy's two hypotheses: the proposal is a rate step (the only design the
     physics lets separate them), written as a schedule file, a rationale and a study experiment that loads."""
@@ -464,6 +476,9 @@ def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
     assert proposal.summary["kind"] == "rate_step" and proposal.summary["worst_accuracy"] > 0.95
     assert read_schedule_file(proposal.files["schedule"]) == as_schedule(proposal.summary["schedule"])
     assert any("next experiment" in line and "rate" in line for line in proposal.lines())
+    assert "the diagnosis's final ambiguity set" in proposal.lines()[0]
+    assert json.loads(proposal.files["rationale"].read_text())["assumptions"]["hypotheses_source"] == \
+        "the diagnosis's final ambiguity set"
     # the predict-role study experiment names the schedule file (its loading: test_proposal_as_a_study_experiment)
     text = proposal.files["study_experiment"].read_text()
     assert 'role = "predict"' in text and f'schedule = "{proposal.files["schedule"].name}"' in text

@@ -27,7 +27,8 @@ from .next_experiment import hypotheses_from_fits, rank_designs
 from .numerical_error import NumericalTerm
 from .proposal import proposal_summary, write_proposal
 
-__all__ = ["NextExperiment", "competing_fits", "propose_next_experiment", "BASE_HYPOTHESIS", "MAX_UNATTRIBUTED"]
+__all__ = ["NextExperiment", "competing_fits", "hypotheses_source", "propose_next_experiment", "BASE_HYPOTHESIS",
+           "MAX_UNATTRIBUTED"]
 
 
 @dataclass(frozen=True)
@@ -42,7 +43,8 @@ class NextExperiment:
         """What ``spflow diagnose`` prints about the proposal."""
         s = self.summary
         accuracy = ", ".join(f"{k} {v:.2f}" for k, v in s["accuracy"].items() if v is not None)
-        out = [f"next experiment (separates {', '.join(s['hypotheses'])}): {s['label']} ({s['kind']}, "
+        out = [f"next experiment (separates {', '.join(s['hypotheses'])}; "
+               f"{s['assumptions'].get('hypotheses_source', 'hypotheses given')}): {s['label']} ({s['kind']}, "
                f"{s['total_pv']:.3g} PV)",
                f"  predicted decision accuracy if each is true: {accuracy}; worst expected log predictive ratio "
                f"{s['worst_expected_log_ratio_nat']:.3g} nat"]
@@ -68,7 +70,7 @@ def competing_fits(diag: GapDiagnosis) -> dict:
       held-out coreflood well enough to be declared, i.e. weakly identified): the base model itself
       (:data:`BASE_HYPOTHESIS`) and the first step's refits of the first :data:`MAX_UNATTRIBUTED` closers;
 
-    empty otherwise (nothing to separate)."""
+    empty otherwise (nothing to separate; ``verdict.verdict`` returns ``unattributed`` only with closers)."""
     if diag.verdict == "unattributed" and diag.closers:
         names = diag.closers[:MAX_UNATTRIBUTED]
         return {BASE_HYPOTHESIS: diag.base_fit} | {n: diag.steps[0].fits[n] for n in names}
@@ -79,6 +81,17 @@ def competing_fits(diag: GapDiagnosis) -> dict:
         if all(n in step.fits for n in names):
             return {n: step.fits[n] for n in names}
     return {}
+
+
+def hypotheses_source(diag: GapDiagnosis) -> str:
+    """Where :func:`competing_fits` took the hypotheses from, naming any closer it left out (recorded in the
+    proposal's assumptions and printed)."""
+    if diag.verdict != "unattributed":
+        return "the diagnosis's final ambiguity set"
+    left = diag.closers[MAX_UNATTRIBUTED:]
+    return (f"unattributed gap: the base model against the first {min(len(diag.closers), MAX_UNATTRIBUTED)} of the "
+            f"{len(diag.closers)} candidates that close it (best held-out score first)"
+            + (f"; left out: {', '.join(left)}" if left else ""))
 
 
 def propose_next_experiment(diag: GapDiagnosis, directory, *, parallel=None, log=None) -> NextExperiment | None:
@@ -98,6 +111,7 @@ def propose_next_experiment(diag: GapDiagnosis, directory, *, parallel=None, log
     table = rank_designs(hypotheses_from_fits(fits), diag.base, reference, variables=variables,
                          min_delta=diag.options.rule.min_delta, se_factor=diag.options.rule.se_factor,
                          numerical=numerical, parallel=parallel, log=log)
+    table.attrs["hypotheses_source"] = hypotheses_source(diag)
     files = write_proposal(table, directory)
     text, _ = study_experiment_toml("next_experiment", files["schedule"].name, reference.core,
                                     reference.measurement, reference.name)
