@@ -135,8 +135,11 @@ def corefloods(source: str, case: str, seed: int, workdir: Path) -> dict[str, ob
     return out
 
 
-def run_one(source: str, case: str, seed: int, jobs: int, variant: str = "dispersion_off") -> dict:
-    """Generate one run's data, diagnose it and return its record."""
+def run_one(source: str, case: str, seed: int, jobs: int, variant: str = "dispersion_off",
+            max_effects: int | None = None) -> dict:
+    """Generate one run's data, diagnose it and return its record (``max_effects``: the search's cap, default
+    the variant's ``MAX_EFFECTS``)."""
+    max_effects = MAX_EFFECTS[variant] if max_effects is None else max_effects
     from joblib import Parallel
 
     start = time.perf_counter()
@@ -145,10 +148,10 @@ def run_one(source: str, case: str, seed: int, jobs: int, variant: str = "disper
     with Parallel(n_jobs=jobs) as parallel:
         diag = diagnose([data[n] for n in CALIBRATION], [data[n] for n in HELDOUT], base_model(case, variant),
                         catalogue(variant),
-                        Options(variables=VARIABLES, pv_step=0.1, max_effects=MAX_EFFECTS[variant]),
+                        Options(variables=VARIABLES, pv_step=0.1, max_effects=max_effects),
                         parallel=parallel if jobs > 1 else None)
     result = summary(report_dataset(diag))
-    return {"source": source, "variant": variant, "max_effects": MAX_EFFECTS[variant], "case": case, "seed": seed,
+    return {"source": source, "variant": variant, "max_effects": max_effects, "case": case, "seed": seed,
             "truth": list(CASES[case][1]),
             "verdict": result["verdict"], "effects": [e["name"] for e in result["effects"]],
             "strengths": {e["name"]: e["strength"] for e in result["effects"]},
@@ -244,6 +247,9 @@ def main(argv=None) -> int:
     parser.add_argument("--sources", nargs="+", default=list(SOURCES), choices=list(SOURCES))
     parser.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    parser.add_argument("--max-effects", type=int, default=None,
+                        help="the search's cap on added effects for every variant (default: the variant's, "
+                             f"{MAX_EFFECTS}); use another --results directory, records are keyed without it")
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--results", default=str(ROOT / "out" / "independent_world"))
     parser.add_argument("--report-only", action="store_true")
@@ -263,7 +269,7 @@ def main(argv=None) -> int:
                 for c in args.cases if (s, v, c, k) not in done]
         print(f"{len(plan)} run(s) to do, {len(done)} done")
         for source, variant, case, seed in plan:
-            record = run_one(source, case, seed, args.jobs, variant)
+            record = run_one(source, case, seed, args.jobs, variant, args.max_effects)
             records.append(record)
             with store.open("a") as fh:
                 fh.write(json.dumps(record) + "\n")
