@@ -6,6 +6,7 @@ import pytest
 
 from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.basis import design_matrix, multi_indices
+from spflow.plugins.surrogates.degree_adaptive import fit_pce
 from spflow.plugins.surrogates.lars import hybrid_lars, hybrid_lars_outputs
 from spflow.plugins.surrogates.regression import ols
 
@@ -99,3 +100,54 @@ def test_bad_input():
         hybrid_lars_outputs(psi, psi[:, 1])
     with pytest.raises(ParameterError, match="finite"):
         hybrid_lars(psi, np.full(psi.shape[0], np.inf))
+
+
+def _lar_entry_order(x, y, steps):
+    """Plain least-angle regression written out here from Efron, Hastie, Johnstone & Tibshirani (2004, §2,
+    Eqs. 2.4-2.13): the order in which the columns of ``x`` (centred, equal norms) enter the active set."""
+    active, mu = [int(np.argmax(np.abs(x.T @ y)))], np.zeros(y.size)
+    while len(active) < steps:
+        c = x.T @ (y - mu)
+        big_c = np.abs(c[active]).max()
+        xa = x[:, active] * np.sign(c[active])
+        g_inv_1 = np.linalg.solve(xa.T @ xa, np.ones(len(active)))
+        a_a = 1.0 / np.sqrt(g_inv_1.sum())
+        u = xa @ (a_a * g_inv_1)  # the equiangular direction
+        a = x.T @ u
+        gamma = np.full(x.shape[1], np.inf)
+        for j in set(range(x.shape[1])) - set(active):
+            steps_j = [(big_c - c[j]) / (a_a - a[j]), (big_c + c[j]) / (a_a + a[j])]
+            gamma[j] = min(s for s in steps_j if s > 1e-12 * big_c / a_a)
+        active.append(int(np.argmin(gamma)))
+        mu += gamma[active[-1]] * u
+    return active
+
+
+@pytest.mark.parametrize("seed", [2, 5])
+def test_plain_lar_ranking_is_the_entry_order_of_least_angle_regression(seed):
+    psi = _basis(n=200, d=4, p=3, seed=20 + seed)  # 34 candidate terms, well conditioned
+    rng = np.random.default_rng(30 + seed)
+    truth = np.zeros(psi.shape[1])
+    support = rng.choice(np.arange(1, psi.shape[1]), 18, replace=False)
+    truth[support] = rng.uniform(0.2, 2.0, 18) * rng.choice([-1, 1], 18)
+    y = psi @ truth + 0.3 * np.tanh(3.0 * psi[:, 1])  # not a polynomial: the path runs past the support
+    x = psi[:, 1:] - psi[:, 1:].mean(axis=0)
+    x /= np.linalg.norm(x, axis=0)
+    expected = 1 + np.array(_lar_entry_order(x, y - y.mean(), x.shape[1] - 1))
+    lar = hybrid_lars(psi, y, ranking="lar").active
+    # the selected model is a prefix of the ranking: constant, then the reference's entry order
+    assert lar[0] == 0 and lar.size > 15
+    np.testing.assert_array_equal(lar[1:], expected[: lar.size - 1])
+    # on these designs a regressor leaves the LASSO path (and re-enters later or never): its ranking differs
+    lasso = hybrid_lars(psi, y).active
+    assert not np.array_equal(lasso[1:], expected[: lasso.size - 1])
+
+
+def test_unknown_ranking_is_refused():
+    psi = _basis()
+    with pytest.raises(ParameterError, match="ranking must be one of"):
+        hybrid_lars(psi, psi[:, 1], ranking="lars")
+    with pytest.raises(ParameterError, match="ranking must be one of"):
+        hybrid_lars_outputs(psi, psi[:, 1:3], ranking="omp")
+    with pytest.raises(ParameterError, match="fit_pce: ranking must be one of"):
+        fit_pce(np.zeros((10, 2)), np.arange(10.0), solver="lars", ranking="LASSO")

@@ -102,7 +102,7 @@ class PCEFit:
         return float(np.mean(self.empirical))
 
 
-def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, parallel) -> tuple[np.ndarray, ...]:
+def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, ranking: str, parallel) -> tuple[np.ndarray, ...]:
     """(coefficients (m, P), loo, modified_loo, empirical) of one basis."""
     from .lars import hybrid_lars_outputs  # scikit-learn loads when a PCE is fitted
 
@@ -113,12 +113,12 @@ def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, parallel) -> tuple[n
         fit = ols(psi, y)
         return fit.coefficients.T, fit.loo, fit.modified_loo, fit.empirical
     if parallel is None or y.shape[1] == 1:
-        results = hybrid_lars_outputs(psi, y)
+        results = hybrid_lars_outputs(psi, y, ranking)
     else:
         from joblib import delayed
 
         chunks = np.array_split(np.arange(y.shape[1]), min(y.shape[1], max(1, parallel.n_jobs)))
-        parts = parallel(delayed(hybrid_lars_outputs)(psi, y[:, c]) for c in chunks)
+        parts = parallel(delayed(hybrid_lars_outputs)(psi, y[:, c], ranking) for c in chunks)
         results = [r for part in parts for r in part]
     return (np.array([r.coefficients for r in results]), np.array([r.loo for r in results]),
             np.array([r.modified_loo for r in results]), np.array([r.empirical for r in results]))
@@ -165,11 +165,13 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
             solver: str = "ols", target_loo: float | None = 0.0, early_stop: bool = True,
             max_terms_ratio: float = MAX_TERMS_RATIO, parallel=None,
             progress: Callable[[int, int], None] | None = None,
-            families: Sequence[PolynomialFamily] | None = None) -> PCEFit:
+            families: Sequence[PolynomialFamily] | None = None, ranking: str = "lasso") -> PCEFit:
     """Fit a PCE of ``y`` (N,) or (N, m) at reference points ``z`` (N, d), choosing degree and q as above.
 
     ``families`` gives each coordinate's orthonormal family (:mod:`.orthonormal_polynomials`); None means Legendre
-    for all, z in [-1, 1]^d.
+    for all, z in [-1, 1]^d. ``ranking`` ("lasso" or "lar", :data:`.lars.RANKINGS`) is how the LARS solver ranks
+    the regressors: the LASSO-modified path (default) or plain LAR (docs/surrogates.md, "Where spflow's PCE trails
+    OpenTURNS").
 
     ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers;
     ``progress(degree, degree_max)`` (e.g. from ``ctx.report_progress``) is told each degree tried, and
@@ -177,12 +179,14 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     degree is the cap.
     """
     from .basis import design_matrix, multi_indices  # numba/numpoly load when a PCE is fitted
+    from .lars import check_ranking  # scikit-learn loads when a PCE is fitted
 
     z = np.atleast_2d(np.asarray(z, dtype=float))
     y = np.asarray(y, dtype=float)
     y = y[:, None] if y.ndim == 1 else y
     qs = [float(v) for v in (q if isinstance(q, Sequence) else [q])]
     _check(z, y, degree_max, qs, solver, target_loo, max_terms_ratio, families)
+    check_ranking(ranking, "fit_pce")
     max_terms = max(int(max_terms_ratio * z.shape[0]), MIN_TERMS)
     history: list[tuple[int, float, int, float]] = []
     best, best_score, degree_scores = None, np.inf, []
@@ -198,7 +202,8 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
                 too_big.append(indices.shape[0])
                 continue
             with single_threaded_blas():
-                coef, loo, modified, emp = _fit_basis(design_matrix(z, indices, families), y, solver, parallel)
+                coef, loo, modified, emp = _fit_basis(design_matrix(z, indices, families), y, solver, ranking,
+                                                            parallel)
             score = float(np.mean(modified))
             history.append((degree, qv, indices.shape[0], score))
             q_scores.append(score)

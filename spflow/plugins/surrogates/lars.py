@@ -14,7 +14,10 @@ polynomials that entered early and became useless stay ahead of better ones in t
 must carry them. On issue #24's benchmark (``benchmarks/bench_surrogates_peers.py``, Ishigami, median of 5 LHS
 designs) the LASSO ranking gave ε_val 1.6e-4 / 7.1e-8 / 1.7e-11 at N = 50 / 100 / 200 against 3.5e-2 / 3.7e-5 / 7.2e-9
 for plain LAR (OpenTURNS' LARS: 0.62 / 4.7e-5 / 2.1e-11); on Borehole, the G-function and the BCF1 simulator it was
-as good or better within 20 % (docs/surrogates.md, Benchmark against peers).
+as good or better within 20 % (docs/surrogates.md, Benchmark against peers). Plain LAR stays available
+(``ranking="lar"``): it is the better ranking on the G-function at N = 200-400, and neither the corrected LOO nor a
+K-fold cross-validation of this step tells the two apart there (docs/surrogates.md, "Where spflow's PCE trails
+OpenTURNS").
 
 All refits come from one QR factorisation of the regressors in LARS order: with Ψ_k = Q_k R_k, the hat diagonal is
 h_k = Σ_{j<=k} Q_j², the fitted values are Σ_{j<=k} Q_j (Q_jᵀ y) and tr((Ψ_kᵀΨ_k)⁻¹) = ||R_k⁻¹||²_F, all cumulative
@@ -45,7 +48,12 @@ from spflow.core.errors import ParameterError
 from .blas import single_threaded_blas
 from .regression import is_constant, loo_correction, relative_errors
 
-__all__ = ["LarsResult", "hybrid_lars", "hybrid_lars_outputs", "PATH_SCALE"]
+__all__ = ["LarsResult", "hybrid_lars", "hybrid_lars_outputs", "check_ranking", "PATH_SCALE", "RANKINGS"]
+
+#: Rankings of the regressors: "lasso", the LASSO-modified LARS path (the default, above), or "lar", plain
+#: least-angle regression (Efron et al. 2004, §2; UQLab's ``uq_lar`` and OpenTURNS' ``LARS``), whose regressors never
+#: leave the active set, so the ranking is the order of first entry.
+RANKINGS = ("lasso", "lar")
 
 #: Standard deviation the centred output is scaled to before ranking. scikit-learn ends a LARS path once the largest
 #: correlation of the residual with a regressor, divided by N, is below float32's epsilon (1.2e-7) *in the units of y*:
@@ -97,8 +105,9 @@ class _Regressors:
         self.gram = x.T @ x
         self.max_steps = int(min(psi.shape[0] - 2, self.candidates.size))
 
-    def path(self, y: np.ndarray) -> np.ndarray:
-        """Columns of Ψ ranked by entry into the final LASSO-LARS active set (at most ``max_steps`` path steps)."""
+    def path(self, y: np.ndarray, ranking: str) -> np.ndarray:
+        """Columns of Ψ ranked by entry into the final active set of the LASSO-LARS (``ranking`` "lasso") or plain LAR
+        ("lar") path (at most ``max_steps`` path steps)."""
         if self.max_steps == 0 or is_constant(y[:, None])[0]:
             return np.zeros(0, dtype=np.int64)
         yc = y - y.mean()
@@ -107,11 +116,11 @@ class _Regressors:
             # the path stops by itself once the residual is numerically zero (exact fit); that is not an error here
             warnings.simplefilter("ignore", ConvergenceWarning)
             _, active, _ = lars_path_gram(self.x.T @ yc, self.gram, n_samples=self.x.shape[0],
-                                          max_iter=self.max_steps, method="lasso")
+                                          max_iter=self.max_steps, method=ranking)
         return self.candidates[np.asarray(active, dtype=np.int64)]
 
-    def fit(self, y: np.ndarray) -> LarsResult:
-        order = np.concatenate([[self.constant], self.path(y)]).astype(np.int64)
+    def fit(self, y: np.ndarray, ranking: str) -> LarsResult:
+        order = np.concatenate([[self.constant], self.path(y, ranking)]).astype(np.int64)
         q, r = np.linalg.qr(self.psi[:, order])
         diag = np.abs(np.diag(r))
         # a regressor numerically dependent on the earlier ones ends the usable path
@@ -155,18 +164,28 @@ def _check_y(y: np.ndarray, n: int, ndim: int) -> np.ndarray:
     return y
 
 
-def hybrid_lars(psi: np.ndarray, y: np.ndarray) -> LarsResult:
-    """Hybrid LARS of one output ``y`` (N,) on the regressors ``psi`` (N, P) (one column must be constant)."""
+def check_ranking(ranking, where: str) -> None:
+    """``ranking`` must be one of :data:`RANKINGS`; ``where`` names the caller in the error."""
+    if ranking not in RANKINGS:
+        raise ParameterError(f"{where}: ranking must be one of {RANKINGS} (LASSO-modified LARS or plain LAR), got "
+                             f"{ranking!r}")
+
+
+def hybrid_lars(psi: np.ndarray, y: np.ndarray, ranking: str = "lasso") -> LarsResult:
+    """Hybrid LARS of one output ``y`` (N,) on the regressors ``psi`` (N, P) (one column must be constant), the
+    regressors ranked by ``ranking`` (:data:`RANKINGS`)."""
+    check_ranking(ranking, "hybrid_lars")
     regressors = _Regressors(psi)
     y = _check_y(y, regressors.psi.shape[0], 1)
     with single_threaded_blas():
-        return regressors.fit(y)
+        return regressors.fit(y, ranking)
 
 
-def hybrid_lars_outputs(psi: np.ndarray, y: np.ndarray) -> list[LarsResult]:
+def hybrid_lars_outputs(psi: np.ndarray, y: np.ndarray, ranking: str = "lasso") -> list[LarsResult]:
     """One independent hybrid LARS per column of ``y`` (N, m) (UQLab's treatment of vector outputs); the centred
     regressors and their Gram matrix are computed once."""
+    check_ranking(ranking, "hybrid_lars")
     regressors = _Regressors(psi)
     y = _check_y(y, regressors.psi.shape[0], 2)
     with single_threaded_blas():
-        return [regressors.fit(np.ascontiguousarray(y[:, j])) for j in range(y.shape[1])]
+        return [regressors.fit(np.ascontiguousarray(y[:, j]), ranking) for j in range(y.shape[1])]
