@@ -16,7 +16,10 @@ Per step (all in pore-volume units, see ``transport``):
    water volume by ``CAPILLARY_DS_MAX``, but not below ``CAPILLARY_MIN_FRACTION`` of the advective step (an accuracy
    limit: it needs none for stability); the adaptive mode takes the explicit step while its diffusion limit is at
    least the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED`` (the switch step), and else the implicit step at
-   the switch step (or the advective step if that is shorter). The step is capped by a ramp
+   the switch step (or the advective step if that is shorter); the budgeted mode is the explicit flux until
+   ``BUDGET_EXPLICIT_SHARE`` of the step budget is used and the diffusion limit sets the step, and from that step
+   on the adaptive mode at a switch step that fits the remaining PV into ``BUDGET_IMPLICIT_SHARE`` of the
+   remaining steps. The step is capped by a ramp
    from every slug start (``ramp_step``:
    the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
    shortened to land exactly on slug ends and profile times. Output times never shorten a step, so the series do
@@ -37,7 +40,9 @@ Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status``
 ``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell; ``stats[N_STATS]`` counts the step
 halvings (``ST_HALVINGS``), the steps whose step was set by the capillary term rather than the wave speed
 (``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one),
-the steps capped by the ramp (``ST_RAMP``) and the steps taken with the implicit capillary step (``ST_IMPLICIT``).
+the steps capped by the ramp (``ST_RAMP``) and the steps taken with the implicit capillary step (``ST_IMPLICIT``);
+in the budgeted mode the time (PV) and the step count at which it switched (``ST_SWITCH_PV``, ``ST_SWITCH_AT``: -1
+if it did not) and the switch step from there (``ST_SWITCH_STEP``, PV).
 ``totals[4, 6]`` holds, per component, the amount in place at the start, injected, produced and in place at the end
 (PV units), for the mass balance.
 """
@@ -58,8 +63,8 @@ P_SW, P_SO, P_SME, P_CP, P_CS, P_SAL, P_PRES, P_ADS3, P_ADS4, P_OIL, P_IFT = ran
 N_PROFILE = 11
 N_INFO = 12
 # stats rows
-ST_HALVINGS, ST_CAPILLARY, ST_RAMP, ST_IMPLICIT = range(4)
-N_STATS = 4
+ST_HALVINGS, ST_CAPILLARY, ST_RAMP, ST_IMPLICIT, ST_SWITCH_PV, ST_SWITCH_AT, ST_SWITCH_STEP = range(7)
+N_STATS = 7
 # dispersion rows
 D_ANION, D_DIVALENT, D_SURF, D_POLY = range(4)
 N_DISP = 4
@@ -82,6 +87,12 @@ CAPILLARY_MIN_FRACTION = 0.05
 # (budgets.expected_steps), so the capillary term costs at most half the default budget; where the explicit step
 # would be shorter, the implicit capillary step at the switch step
 CAPILLARY_SWITCH_SPEED = 100.0
+# the budgeted capillary mode (the default) is the explicit flux, bit for bit, in every run that finishes within
+# BUDGET_EXPLICIT_SHARE of its step budget; at the first step after that share whose step the explicit diffusion
+# limit sets, it switches for the rest of the run to the adaptive rule with the switch step that fits the remaining
+# PV into BUDGET_IMPLICIT_SHARE of the remaining steps (the rest is left to the wave speed)
+BUDGET_EXPLICIT_SHARE = 0.5
+BUDGET_IMPLICIT_SHARE = 0.5
 
 
 @njit(cache=True, error_model="numpy")
@@ -281,7 +292,9 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step); ``capillary_mode`` the time
     discretisation of the capillary flux (``state_layout.CAP_EXPLICIT``: explicit fluxes with the diffusion step
     limit; ``CAP_IMPLICIT``: the linearly implicit capillary step on every step; ``CAP_ADAPTIVE``: explicit while
-    the diffusion limit stays above the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED``, implicit below).
+    the diffusion limit stays above the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED``, implicit below;
+    ``CAP_BUDGETED``: explicit until ``BUDGET_EXPLICIT_SHARE`` of ``max_steps`` is used, then adaptive at the
+    switch step of the remaining budget, from the first such step the diffusion limit sets).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
@@ -315,11 +328,16 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     # whether the current (last) step takes the implicit capillary step (for the budget message before a step)
     implicit_step = capillary and capillary_mode == L.CAP_IMPLICIT
     switch_step = cfl * dx / CAPILLARY_SWITCH_SPEED
+    # budgeted mode: whether it has switched to the adaptive rule, and from which step count it may
+    switched = False
+    switch_after = BUDGET_EXPLICIT_SHARE * max_steps
     series = np.zeros((R.N_SERIES, n_out))
     prof = np.zeros((N_PROFILE, n_prof, n))
     totals = np.zeros((4, 6))
     info = np.zeros(N_INFO)
     stats = np.zeros(N_STATS)
+    stats[ST_SWITCH_PV] = -1.0
+    stats[ST_SWITCH_AT] = -1.0
     cum = np.zeros(R.N_CUM)  # cumulative produced amounts (output_records), at t, t_prev and the last output
     cum_prev = np.zeros(R.N_CUM)
     cum_last = np.zeros(R.N_CUM)
@@ -407,8 +425,18 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
                 dmax = pr[L.DCAP, i]
         rate = smax / dx + 2.0 * dmax / (dx * dx)
         dt_stable = cfl / rate if rate > 0.0 else np.inf
+        if (capillary and capillary_mode == L.CAP_BUDGETED and not switched and steps >= switch_after
+                and 2.0 * dmax / dx > smax):
+            # the explicit diffusion limit would carry the run past its budget: the adaptive rule from here, at
+            # the switch step that leaves (1 - BUDGET_IMPLICIT_SHARE) of the remaining steps to the wave speed
+            switched = True
+            switch_step = (t_end - t) / (BUDGET_IMPLICIT_SHARE * (max_steps - steps))
+            stats[ST_SWITCH_PV] = t
+            stats[ST_SWITCH_AT] = steps
+            stats[ST_SWITCH_STEP] = switch_step
         implicit_step = capillary and (capillary_mode == L.CAP_IMPLICIT
-                                       or (capillary_mode == L.CAP_ADAPTIVE and dt_stable < switch_step))
+                                       or ((capillary_mode == L.CAP_ADAPTIVE or switched)
+                                           and dt_stable < switch_step))
         if implicit_step:
             # the advective step, shortened by the saturation-change control (implicit mode) or to the switch step
             dt_stable = cfl / (smax / dx) if smax > 0.0 else np.inf
