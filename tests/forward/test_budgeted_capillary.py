@@ -132,19 +132,18 @@ def waterflood(capillary, cfl=0.5, max_steps=None):
 def test_a_capillary_dominated_flood_finishes_in_the_default_budget_near_the_converged_explicit_run():
     """A low-rate waterflood whose explicit diffusion limit needs ~65 000 steps against a default budget of 15 000:
     the explicit mode stops with the budget error; the budgeted mode switches at half the budget, takes the
-    implicit step at the switch step ``remaining PV / (BUDGET_IMPLICIT_SHARE x remaining steps)``, finishes inside
-    the budget, and its recovery is within 2e-3 (dp within 1 % from 0.15 PV on) of the explicit run at cfl 0.1."""
+    implicit step at the switch step ``remaining PV / (BUDGET_IMPLICIT_SHARE x remaining steps)`` (so at most that
+    share of the remaining steps), finishes inside the budget, and its recovery is within 2e-3 (dp within 1 % from 0.15 PV on) of the explicit run at cfl 0.1."""
     budget = STEP_BUDGET_FACTOR * expected_steps(PV, 25, 0.5)
     with pytest.raises(SimulationError, match=f"max_steps = {budget}"):
         waterflood("explicit")
     ds = waterflood("budgeted")
     assert ds.attrs["max_steps"] == budget and ds.attrs["n_steps"] <= budget
-    switch_pv = ds.attrs["capillary_implicit_from_pv"]
     switch_at = int(BUDGET_EXPLICIT_SHARE * budget)
-    step = (PV - switch_pv) / (BUDGET_IMPLICIT_SHARE * (budget - switch_at))
-    assert f"switch step {step:.3g} PV" in ds.attrs["capillary_switch"]
-    # the implicit steps after the switch are at most that many
-    assert ds.attrs["n_capillary_implicit"] <= (PV - switch_pv) / step + 2
+    assert f"at step {switch_at} of max_steps = {budget}" in ds.attrs["capillary_switch"]
+    assert 0.0 < ds.attrs["capillary_implicit_from_pv"] < PV
+    # the capillary-limited implicit steps take at most BUDGET_IMPLICIT_SHARE of the steps left at the switch
+    assert 0 < ds.attrs["n_capillary_implicit"] <= BUDGET_IMPLICIT_SHARE * (budget - switch_at) + 1
     ref = waterflood("explicit", 0.1, 10**8)
     assert np.max(np.abs(ds.recovery.values - ref.recovery.values)) <= 2e-3
     later = ref.pv.values >= 0.15

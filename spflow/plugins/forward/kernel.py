@@ -19,7 +19,7 @@ Per step (all in pore-volume units, see ``transport``):
    the switch step (or the advective step if that is shorter); the budgeted mode is the explicit flux until
    ``BUDGET_EXPLICIT_SHARE`` of the step budget is used and the diffusion limit sets the step, and from that step
    on the adaptive mode at a switch step that fits the remaining PV into ``BUDGET_IMPLICIT_SHARE`` of the
-   remaining steps. The step is capped by a ramp
+   remaining steps (recomputed every step, never below its value at the switch). The step is capped by a ramp
    from every slug start (``ramp_step``:
    the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
    shortened to land exactly on slug ends and profile times. Output times never shorten a step, so the series do
@@ -41,8 +41,9 @@ Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status``
 halvings (``ST_HALVINGS``), the steps whose step was set by the capillary term rather than the wave speed
 (``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one),
 the steps capped by the ramp (``ST_RAMP``) and the steps taken with the implicit capillary step (``ST_IMPLICIT``);
-in the budgeted mode the time (PV) and the step count at which it switched (``ST_SWITCH_PV``, ``ST_SWITCH_AT``: -1
-if it did not) and the switch step from there (``ST_SWITCH_STEP``, PV).
+in the budgeted mode the step count at which it switched to the adaptive rule (``ST_SWITCH_AT``, -1 if it did not),
+the switch step then (``ST_SWITCH_STEP``, PV) and the time of its first implicit capillary step (``ST_SWITCH_PV``,
+-1 if it took none: then the run is the explicit one).
 ``totals[4, 6]`` holds, per component, the amount in place at the start, injected, produced and in place at the end
 (PV units), for the mass balance.
 """
@@ -90,7 +91,8 @@ CAPILLARY_SWITCH_SPEED = 100.0
 # the budgeted capillary mode (the default) is the explicit flux, bit for bit, in every run that finishes within
 # BUDGET_EXPLICIT_SHARE of its step budget; at the first step after that share whose step the explicit diffusion
 # limit sets, it switches for the rest of the run to the adaptive rule with the switch step that fits the remaining
-# PV into BUDGET_IMPLICIT_SHARE of the remaining steps (the rest is left to the wave speed)
+# PV into BUDGET_IMPLICIT_SHARE of the remaining steps (the rest is left to the wave speed); recomputed every step
+# and never below its value at the switch, so that where the wave speed uses up steps the capillary step grows
 BUDGET_EXPLICIT_SHARE = 0.5
 BUDGET_IMPLICIT_SHARE = 0.5
 
@@ -431,13 +433,16 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             # the switch step that leaves (1 - BUDGET_IMPLICIT_SHARE) of the remaining steps to the wave speed
             switched = True
             switch_step = (t_end - t) / (BUDGET_IMPLICIT_SHARE * (max_steps - steps))
-            stats[ST_SWITCH_PV] = t
             stats[ST_SWITCH_AT] = steps
             stats[ST_SWITCH_STEP] = switch_step
+        elif switched:
+            switch_step = max(stats[ST_SWITCH_STEP], (t_end - t) / (BUDGET_IMPLICIT_SHARE * (max_steps - steps)))
         implicit_step = capillary and (capillary_mode == L.CAP_IMPLICIT
                                        or ((capillary_mode == L.CAP_ADAPTIVE or switched)
                                            and dt_stable < switch_step))
         if implicit_step:
+            if switched and stats[ST_SWITCH_PV] < 0.0:
+                stats[ST_SWITCH_PV] = t
             # the advective step, shortened by the saturation-change control (implicit mode) or to the switch step
             dt_stable = cfl / (smax / dx) if smax > 0.0 else np.inf
             if capillary_mode == L.CAP_IMPLICIT:

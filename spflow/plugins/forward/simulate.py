@@ -37,17 +37,20 @@ def kernel_arguments(sched, resolved, strengths, pv_step):
 
 
 def switch_record(capillary, switch_pv, switch_at, switch_step, max_steps, pc_on):
-    """The attrs ``capillary_implicit_from_pv`` (PV, NaN without a switch) and ``capillary_switch`` (the reason) of
-    a run: where the budgeted capillary mode left the explicit flux, or why it did not."""
+    """The attrs ``capillary_implicit_from_pv`` (PV of the first implicit capillary step of the budgeted mode, NaN
+    if it took none) and ``capillary_switch`` (why and where, or why not) of a run."""
     from .kernel import BUDGET_EXPLICIT_SHARE, BUDGET_IMPLICIT_SHARE
 
-    if switch_at >= 0:
-        text = (f"explicit capillary flux until {switch_pv:.6g} PV (step {switch_at} of max_steps = {max_steps}: "
-                f"{BUDGET_EXPLICIT_SHARE:g} of the step budget used, the explicit diffusion limit setting the step);"
-                f" from there the implicit capillary step wherever the explicit step is below the switch step "
-                f"{switch_step:.3g} PV (the remaining PV in {BUDGET_IMPLICIT_SHARE:g} of the remaining steps)")
+    rule = (f"at step {switch_at} of max_steps = {max_steps} ({BUDGET_EXPLICIT_SHARE:g} of the step budget used, "
+            f"the explicit diffusion limit setting the step) the capillary mode switched to the implicit step "
+            f"wherever the explicit one is below the switch step, {switch_step:.3g} PV then (the remaining PV in "
+            f"{BUDGET_IMPLICIT_SHARE:g} of the remaining steps, recomputed every step)")
+    if switch_pv >= 0.0:
+        text = f"explicit capillary flux until {switch_pv:.6g} PV, the first implicit capillary step: {rule}"
         return {"capillary_implicit_from_pv": float(switch_pv), "capillary_switch": text}
-    if capillary != "budgeted":
+    if switch_at >= 0:
+        text = f"none: {rule}, but the explicit step never fell below it (the run is the explicit one)"
+    elif capillary != "budgeted":
         text = f"none: capillary = {capillary!r} does not switch"
     elif not pc_on:
         text = "none: capillary pressure is off"
@@ -116,8 +119,8 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ``n_halvings`` (retried steps), ``n_capillary_limited`` (steps whose step the capillary term set: the
     saturation-change limit of the implicit step, the switch step of the adaptive mode, the diffusion limit of the
     explicit flux), ``n_ramp_limited`` (steps capped by the ramp after a slug start) and ``n_capillary_implicit``
-    (steps taken with the implicit capillary step), ``capillary_implicit_from_pv`` (the PV from which the budgeted
-    mode took the adaptive rule; NaN if it did not switch) and ``capillary_switch`` (why and where it switched, or
+    (steps taken with the implicit capillary step), ``capillary_implicit_from_pv`` (the PV of the budgeted mode's
+    first implicit capillary step; NaN if it took none) and ``capillary_switch`` (why and where it switched, or
     why not) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
     sets its own).
 
