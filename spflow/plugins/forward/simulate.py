@@ -51,7 +51,8 @@ def switch_record(capillary, switch_pv, switch_at, switch_step, max_steps, pc_on
     if switch_at >= 0:
         text = f"none: {rule}, but the explicit step never fell below it (the run is the explicit one)"
     elif capillary != "budgeted":
-        text = f"none: capillary = {capillary!r} does not switch"
+        text = (f"none: only capillary = 'budgeted' switches (this run: {capillary!r}, its implicit capillary steps "
+                f"in n_capillary_implicit)")
     elif not pc_on:
         text = "none: capillary pressure is off"
     else:
