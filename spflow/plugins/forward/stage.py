@@ -17,10 +17,11 @@ wall-time budget exhausted, ``budgets``) does not abort the stage: its rows are 
 ``failure`` variable (dim ``sample``) holds the reason (``"<experiment>: <message>"``; ``""`` for a sample that
 ran). The stage warns with the count; stages consuming the responses drop failed samples and say how many.
 
-Capillary time step: the default ``capillary = "budgeted"`` is simulate's (the explicit flux unless a run would
-spend more than half its step budget on the explicit diffusion limit); the optional variable
-``capillary_implicit_from_pv`` (dims ``sample``, ``experiment``) holds the PV from which a run took the implicit
-capillary step (NaN where it did not switch, and for failed samples), so a switched run is visible in the output.
+Step control: the default ``capillary = "budgeted"`` is simulate's (the explicit scheme in every run inside half its
+step budget; past it, the implicit capillary step and the implicit release of oil where the explicit limits would
+exceed the budget); the optional variables ``capillary_implicit_from_pv`` and ``oil_release_implicit_from_pv``
+(dims ``sample``, ``experiment``) hold the PV of a run's first implicit capillary step and first implicit release
+(NaN where it took none, and for failed samples), so a run that left the explicit scheme is visible in the output.
 """
 
 from __future__ import annotations
@@ -74,7 +75,11 @@ RESPONSES = DatasetSchema(
                                               long_name="injected PV from which the run took the implicit "
                                                         "capillary step",
                                               doc="simulate's attr of that name: NaN where the run kept the "
-                                                  "explicit capillary flux (or failed)")},
+                                                  "explicit capillary flux (or failed)"),
+       "oil_release_implicit_from_pv": Variable(("sample", "experiment"), units="1", required=False, allow_nan=True,
+                                                long_name="injected PV of the run's first implicit release of oil",
+                                                doc="simulate's attr of that name: NaN where the run took none (or "
+                                                    "failed)")},
     doc="simulated coreflood responses",
 )
 
@@ -113,8 +118,8 @@ class Forward(Stage):
                             doc="wall-time budget of each run"),
         "capillary": Param(str, DEFAULT_CAPILLARY, choices=list(CAPILLARY),
                            doc="time discretisation of the capillary flux when capillary_pressure is on (simulate's "
-                               "capillary: budgeted = explicit unless the explicit diffusion limit would use more "
-                               "than half the step budget; docs/forward_model.md)"),
+                               "capillary: budgeted = the explicit scheme unless a run would need more than half its "
+                               "step budget; docs/forward_model.md)"),
     }
 
     @classmethod
@@ -151,6 +156,7 @@ class Forward(Stage):
         grid, positions = common_grid(total, self.params["pv_step"])
         data = {name: np.full((len(rows), len(experiments), grid.size), np.nan) for name in RESPONSE_UNITS}
         switch_pv = np.full((len(rows), len(experiments)), np.nan)
+        release_pv = np.full((len(rows), len(experiments)), np.nan)
         failure = np.array([r if isinstance(r, str) else "" for r in runs], dtype=object)
         n_failed = int(np.count_nonzero(failure != ""))
         if n_failed:
@@ -162,13 +168,15 @@ class Forward(Stage):
                 continue
             for j, ds in enumerate(sample_runs):
                 switch_pv[i, j] = ds.attrs["capillary_implicit_from_pv"]
+                release_pv[i, j] = ds.attrs["oil_release_implicit_from_pv"]
                 for name in RESPONSE_UNITS:
                     data[name][i, j, positions[j]] = ds[name].values
         out = xr.Dataset(
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
             | {"total_pv": ("experiment", total, {"units": "1"}), "failure": ("sample", failure.astype(str)),
-               "capillary_implicit_from_pv": (("sample", "experiment"), switch_pv, {"units": "1"})},
+               "capillary_implicit_from_pv": (("sample", "experiment"), switch_pv, {"units": "1"}),
+               "oil_release_implicit_from_pv": (("sample", "experiment"), release_pv, {"units": "1"})},
             coords={"sample": ("sample", np.arange(len(rows)), {"units": "1", "long_name": "sample number"}),
                     "experiment": ("experiment", [e.name for e in experiments], {"long_name": "coreflood"}),
                     "pv": ("pv", grid, {"units": "1", "long_name": "injected pore volumes"})},
