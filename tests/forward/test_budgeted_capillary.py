@@ -222,8 +222,8 @@ def test_a_run_past_half_its_budget_releases_oil_implicitly_and_finishes():
     with the budget error; the budgeted mode, past half its budget, takes the oleic waves above the budget step's
     speed with the implicit release and finishes inside the budget -- identical to the explicit run before its
     first release, all six components balanced to 1e-10, oil from the outputs, in bounds, and within 0.02 in
-    recovery (0.01 at the end) of the explicit run with the default budget (a first-order implicit step twice the
-    CFL step over the last 60 % of the flood)."""
+    recovery (0.01 at the end) of the explicit run with the default budget (first-order implicit steps, on average
+    1.5 x the explicit ones, over the last 60 % of the flood)."""
     kwargs = dict(cells=30, pv_step=0.05, profiles_at=[1.0, 2.0, BCF_SCHEDULES["BCF1"].total_pv])
     with pytest.raises(SimulationError, match="max_steps = 500"):
         simulate("BCF1", capillary="explicit", max_steps=500, **kwargs)
