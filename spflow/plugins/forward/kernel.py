@@ -301,8 +301,9 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     discretisation of the capillary flux (``state_layout.CAP_EXPLICIT``: explicit fluxes with the diffusion step
     limit; ``CAP_IMPLICIT``: the linearly implicit capillary step on every step; ``CAP_ADAPTIVE``: explicit while
     the diffusion limit stays above the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED``, implicit below;
-    ``CAP_BUDGETED``: explicit until ``BUDGET_EXPLICIT_SHARE`` of ``max_steps`` is used, then adaptive at the
-    switch step of the remaining budget, from the first such step the diffusion limit sets).
+    ``CAP_BUDGETED``: the explicit scheme until ``BUDGET_EXPLICIT_SHARE`` of ``max_steps`` is used, then the budget
+    step as the adaptive switch step, from the first step the diffusion limit sets, and the implicit release of oil
+    where an oleic wave is faster than the budget step allows -- with Pc off too).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic

@@ -17,6 +17,10 @@ second order in space and time; at extrema it falls back to upwind. As ``0 <= ps
 scheme is TVD for Courant numbers up to 1/2 whatever ``nu`` in [0, 1] the factor uses, which the time step
 guarantees (``cfl <= 0.5``). The first interior face and the producer face are first order.
 
+Implicit release of oil (``implicit_release_fluxes``; the kernel's budgeted mode past its share of the step budget):
+the outflow faces of cells whose oleic Courant number exceeds the limit take the linearised backward-Euler upwind
+oleic fraction, swept from the inlet, so the step need not resolve a fast oleic wave that carries almost no oil.
+
 Dispersion (``solve_dispersion``; Eq. 1.9 per phase, summed over phases for each carried species): backward
 Euler in the species' carrier concentration (a tridiagonal M-matrix, unconditionally stable and positivity
 preserving), written back as conservative face fluxes, with no dispersive flux through the injector and producer
