@@ -13,6 +13,9 @@ schedule of BCF1-3 and a random grid of 30-100 cells -- with the default step an
   of the run's expected steps (``budgets.expected_steps``);
 - the slowest draws with the step-control counts (``n_halvings``, ``n_capillary_limited``, ``n_ramp_limited``) and
   the parameters that set them apart, to say which mechanism limits their steps.
+- the runs in which the budgeted mode (``--capillary``, default simulate's ``budgeted``) left the explicit scheme
+  past half the step budget: the implicit capillary step (``capillary_implicit_from_pv``) and the implicit release of
+  oil near a residual (``n_oil_release_implicit``).
 
 Draws: a parameter whose positive range spans more than two decades is drawn log-uniformly, one in [0, upper] with
 ``upper >= 100`` is 0 with probability 0.2 and else log-uniform in [1e-4 upper, upper], others uniformly; integer
@@ -50,6 +53,7 @@ from spflow.plugins.forward.errors import SimulationError  # noqa: E402
 from spflow.plugins.forward.parameters import PARAMETERS, resolve_params  # noqa: E402
 from spflow.plugins.forward.injected_viscosity_cap import (  # noqa: E402
     check_injected_viscosity, peak_injected_viscosity)
+from spflow.plugins.forward.run_arguments import CAPILLARY, DEFAULT_CAPILLARY  # noqa: E402
 from spflow.plugins.forward.schedule import BCF_SCHEDULES  # noqa: E402
 from spflow.plugins.forward.simulate import simulate  # noqa: E402
 
@@ -123,7 +127,7 @@ def injected_peak(case: dict) -> float:
                                   BCF_SCHEDULES[case["schedule"]])[0]
 
 
-def run_case(case: dict, max_wall_s: float | None = None, capillary: str = "explicit",
+def run_case(case: dict, max_wall_s: float | None = None, capillary: str = DEFAULT_CAPILLARY,
              max_steps_factor: float | None = None) -> dict:
     """Run one case; returns the measures of the module docstring (``failure``: the reason, or ``""``).
     ``max_steps_factor``: a step budget of that many times the expected steps (default: simulate's)."""
@@ -153,10 +157,12 @@ def run_case(case: dict, max_wall_s: float | None = None, capillary: str = "expl
     for v in ("oil_cut", "recovery"):
         viol += int(np.count_nonzero((ds[v].values < -TOL) | (ds[v].values > 1.0 + TOL)))
     viol += int(np.count_nonzero(np.diff(ds["recovery"].values) < -TOL))
+    switch = float(ds.attrs["capillary_implicit_from_pv"])
     balance = max(abs(float(v)) for k, v in ds.attrs.items() if k.startswith("mass_balance_error_"))
     out.update(failure="", wall=wall, cpu=cpu, steps=int(ds.attrs["n_steps"]), nonfinite=nonfinite, violations=viol,
                balance=balance, halvings=int(ds.attrs["n_halvings"]), capillary=int(ds.attrs["n_capillary_limited"]),
-               ramp=int(ds.attrs["n_ramp_limited"]))
+               ramp=int(ds.attrs["n_ramp_limited"]), implicit=int(ds.attrs["n_capillary_implicit"]),
+               switch_pv=None if np.isnan(switch) else switch, release=int(ds.attrs["n_oil_release_implicit"]))
     return out
 
 
@@ -193,7 +199,7 @@ def main() -> None:
     parser.add_argument("--slowest", type=int, default=10, help="slowest draws to list")
     parser.add_argument("--max-wall", type=float, help="wall-time budget per run (s; default: simulate's)")
     parser.add_argument("--save", help="write every case and result as JSON lines to this file")
-    parser.add_argument("--capillary", choices=["explicit", "implicit", "adaptive"], default="explicit",
+    parser.add_argument("--capillary", choices=list(CAPILLARY), default=DEFAULT_CAPILLARY,
                         help="time discretisation of the capillary flux (simulate's option)")
     parser.add_argument("--no-cap", action="store_true",
                         help="keep draws above the injected-viscosity cap (the draws of the runs before the cap)")
@@ -251,6 +257,14 @@ def main() -> None:
     print(f"{'slowest run wall time / median':40s} {max(walls) / median:.1f}")
     print(f"{'runs with halvings':40s} {sum(r['halvings'] > 0 for r in ok)}")
     print(f"{'runs mostly capillary-limited':40s} {sum(r['capillary'] > r['steps'] / 2 for r in ok)}")
+    switched = [r for r in ok if r.get("switch_pv") is not None]
+    print(f"{'runs switched to implicit Pc (budgeted)':40s} {len(switched)}"
+          + (f" (max steps / expected among them {max(r['steps'] / r['expected'] for r in switched):.2f})"
+             if switched else ""))
+    released = [r for r in ok if r.get("release", 0) > 0]
+    print(f"{'runs with the implicit oil release':40s} {len(released)}"
+          + (f" (max steps / expected among them {max(r['steps'] / r['expected'] for r in released):.2f})"
+             if released else ""))
     order = sorted(range(len(results)), key=lambda i: -results[i]["wall"])[: args.slowest]
     print("slowest draws: index, schedule, cells, steps / expected, halvings, capillary-limited steps, ramp-limited "
           "steps, wall s, capillary diffusivity scale D_pc, VIS2/VIS1, peak injected viscosity cP, failure")

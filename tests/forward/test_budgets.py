@@ -26,12 +26,13 @@ def test_default_budgets_follow_the_documented_formula():
 
 
 def test_step_budget_is_exact_and_names_pv_cell_and_state():
-    full = simulate(WATER, cells=20)
+    # the explicit scheme: the budgeted default takes longer steps past half a tight budget (test_budgeted_capillary)
+    full = simulate(WATER, cells=20, capillary="explicit")
     steps = full.attrs["n_steps"]
-    again = simulate(WATER, cells=20, max_steps=steps)  # exactly enough
+    again = simulate(WATER, cells=20, max_steps=steps, capillary="explicit")  # exactly enough
     np.testing.assert_array_equal(again["recovery"].values, full["recovery"].values)
     with pytest.raises(SimulationError) as info:
-        simulate(WATER, cells=20, max_steps=steps - 1)
+        simulate(WATER, cells=20, max_steps=steps - 1, capillary="explicit")
     err = info.value
     assert err.code == L.ERR_STEPS
     assert 0.0 < err.pv < 0.5 and 0 <= err.cell < 20

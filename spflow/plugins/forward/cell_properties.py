@@ -410,9 +410,10 @@ def _mobilities(st, pr, prm, n):
         # wave-speed bound (PV units): exact df/dS for two phases, an upper bound for three
         dsum = dl0 + dl1 + dl2
         inv2 = 1.0 / (lam_t * lam_t)
-        speed = max((dl0 * (lam_t - lam0) + lam0 * (dsum - dl0)) * inv2,
-                    (dl1 * (lam_t - lam1) + lam1 * (dsum - dl1)) * inv2,
-                    (dl2 * (lam_t - lam2) + lam2 * (dsum - dl2)) * inv2)
+        wave_a = (dl0 * (lam_t - lam0) + lam0 * (dsum - dl0)) * inv2
+        wave_o = (dl1 * (lam_t - lam1) + lam1 * (dsum - dl1)) * inv2
+        wave_m = (dl2 * (lam_t - lam2) + lam2 * (dsum - dl2)) * inv2
+        speed = max(wave_a, wave_o, wave_m)
         pr[L.WAVE, i] = speed
         v0 = f0 / sat0 if sat0 > 0.0 else 0.0
         v1 = f1 / sat1 if sat1 > 0.0 else 0.0
@@ -420,7 +421,14 @@ def _mobilities(st, pr, prm, n):
         pr[L.V1, i] = v0
         pr[L.V1 + 1, i] = v1
         pr[L.V1 + 2, i] = v2
-        speed = max(speed, max(v0, v2) / e_min, v1)
+        v_bound = max(max(v0, v2) / e_min, v1)
+        speed = max(speed, v_bound)
+        # the oleic wave speed and the bound without it (``transport.implicit_release_fluxes``): with the oleic phase
+        # and one other, that phase's term is the oleic one (df_w/dS_w = df_o/dS_o), so only the phase velocities
+        # remain; with three phases, the other two terms
+        pr[L.WAVE_O, i] = wave_o
+        two_phase_oleic = sat1 > 0.0 and (sat0 > 0.0) != (sat2 > 0.0)
+        pr[L.SPEED_X, i] = v_bound if two_phase_oleic else max(wave_a, wave_m, v_bound)
 
         # dispersion coefficients (PV units): phi S_l K_l / (u L) = alpha_l f_l / L + phi S_l D / (u L)
         k0 = prm[K.ALPHA_D] * f0 + dm * sat0

@@ -16,12 +16,19 @@ Per step (all in pore-volume units, see ``transport``):
    water volume by ``CAPILLARY_DS_MAX``, but not below ``CAPILLARY_MIN_FRACTION`` of the advective step (an accuracy
    limit: it needs none for stability); the adaptive mode takes the explicit step while its diffusion limit is at
    least the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED`` (the switch step), and else the implicit step at
-   the switch step (or the advective step if that is shorter). The step is capped by a ramp
+   the switch step (or the advective step if that is shorter); the budgeted mode is the explicit scheme until
+   ``BUDGET_EXPLICIT_SHARE`` of the step budget is used; from then on the budget step -- the remaining PV in
+   ``BUDGET_IMPLICIT_SHARE`` of the remaining steps, recomputed every step, never below its value at the share --
+   is the adaptive mode's switch step (from the first step the diffusion limit sets), and oleic wave speeds above
+   the budget step's CFL speed leave the step to the other speeds and take the implicit release of oil
+   (``transport.implicit_release_fluxes``: linearised backward-Euler upwind outflow of the cells whose oleic Courant
+   number exceeds ``cfl``). The step is capped by a ramp
    from every slug start (``ramp_step``:
    the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
    shortened to land exactly on slug ends and profile times. Output times never shorten a step, so the series do
    not depend on the output grid;
-5. explicit conservative update of the six components with the TVD (or upwind) fluxes (plus the explicit
+5. explicit conservative update of the six components with the TVD (or upwind) fluxes (the released cells' outflow
+   faces replaced, budgeted mode past its share) (plus the explicit
    capillary fluxes), or, on an implicit capillary step, the advective update followed by the linearly implicit
    capillary step (``capillary_step``: backward Euler in the carrier saturation, operator split, conservative;
    ``transport.implicit_capillary_fluxes``); a step that would make a saturation or concentration
@@ -37,7 +44,11 @@ Returns ``(status, info, n_steps, series, profiles, totals, stats)``; ``status``
 ``info = [pv, cell, M1..M6, S1, S2, S3, dt]`` describes the failing cell; ``stats[N_STATS]`` counts the step
 halvings (``ST_HALVINGS``), the steps whose step was set by the capillary term rather than the wave speed
 (``ST_CAPILLARY``: the saturation-change limit of the implicit step, or the diffusion limit of the explicit one),
-the steps capped by the ramp (``ST_RAMP``) and the steps taken with the implicit capillary step (``ST_IMPLICIT``).
+the steps capped by the ramp (``ST_RAMP``) and the steps taken with the implicit capillary step (``ST_IMPLICIT``);
+in the budgeted mode the step count at which it switched to the adaptive rule (``ST_SWITCH_AT``, -1 if it did not),
+the budget step at the share (``ST_SWITCH_STEP``, PV), the time of its first implicit capillary step
+(``ST_SWITCH_PV``, -1 if it took none), the cell-steps of the implicit release (``ST_RELEASE``) and the time of the
+first (``ST_RELEASE_PV``, -1 if none); a budgeted run with neither is the explicit run.
 ``totals[4, 6]`` holds, per component, the amount in place at the start, injected, produced and in place at the end
 (PV units), for the mass balance.
 """
@@ -58,8 +69,9 @@ P_SW, P_SO, P_SME, P_CP, P_CS, P_SAL, P_PRES, P_ADS3, P_ADS4, P_OIL, P_IFT = ran
 N_PROFILE = 11
 N_INFO = 12
 # stats rows
-ST_HALVINGS, ST_CAPILLARY, ST_RAMP, ST_IMPLICIT = range(4)
-N_STATS = 4
+(ST_HALVINGS, ST_CAPILLARY, ST_RAMP, ST_IMPLICIT, ST_SWITCH_PV, ST_SWITCH_AT, ST_SWITCH_STEP, ST_RELEASE,
+ ST_RELEASE_PV) = range(9)
+N_STATS = 9
 # dispersion rows
 D_ANION, D_DIVALENT, D_SURF, D_POLY = range(4)
 N_DISP = 4
@@ -82,6 +94,13 @@ CAPILLARY_MIN_FRACTION = 0.05
 # (budgets.expected_steps), so the capillary term costs at most half the default budget; where the explicit step
 # would be shorter, the implicit capillary step at the switch step
 CAPILLARY_SWITCH_SPEED = 100.0
+# the budgeted mode (the default) is the explicit scheme, bit for bit, in every run that finishes within
+# BUDGET_EXPLICIT_SHARE of its step budget; past it, the budget step fits the remaining PV into
+# BUDGET_IMPLICIT_SHARE of the remaining steps (recomputed every step, never below its value at the share, so it
+# grows where other limits use up steps): the capillary switch step from the first step the explicit diffusion
+# limit sets, and the step below which fast oleic waves are released implicitly
+BUDGET_EXPLICIT_SHARE = 0.5
+BUDGET_IMPLICIT_SHARE = 0.5
 
 
 @njit(cache=True, error_model="numpy")
@@ -281,7 +300,10 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     budget; ``stop[1]`` the wall-time flag (non-zero: stop before the next step); ``capillary_mode`` the time
     discretisation of the capillary flux (``state_layout.CAP_EXPLICIT``: explicit fluxes with the diffusion step
     limit; ``CAP_IMPLICIT``: the linearly implicit capillary step on every step; ``CAP_ADAPTIVE``: explicit while
-    the diffusion limit stays above the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED``, implicit below).
+    the diffusion limit stays above the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED``, implicit below;
+    ``CAP_BUDGETED``: the explicit scheme until ``BUDGET_EXPLICIT_SHARE`` of ``max_steps`` is used, then the budget
+    step as the adaptive switch step, from the first step the diffusion limit sets, and the implicit release of oil
+    where an oleic wave is faster than the budget step allows -- with Pc off too).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
@@ -315,11 +337,21 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     # whether the current (last) step takes the implicit capillary step (for the budget message before a step)
     implicit_step = capillary and capillary_mode == L.CAP_IMPLICIT
     switch_step = cfl * dx / CAPILLARY_SWITCH_SPEED
+    # budgeted mode: from which step count the budget step applies, whether the capillary flux has switched to the
+    # adaptive rule, the budget step (0 before the share) and the wave speed above which oil is released implicitly
+    switch_after = BUDGET_EXPLICIT_SHARE * max_steps
+    switched = False
+    budget_step = 0.0
+    release_speed = np.inf
+    fc_out = -1.0
     series = np.zeros((R.N_SERIES, n_out))
     prof = np.zeros((N_PROFILE, n_prof, n))
     totals = np.zeros((4, 6))
     info = np.zeros(N_INFO)
     stats = np.zeros(N_STATS)
+    stats[ST_SWITCH_PV] = -1.0
+    stats[ST_SWITCH_AT] = -1.0
+    stats[ST_RELEASE_PV] = -1.0
     cum = np.zeros(R.N_CUM)  # cumulative produced amounts (output_records), at t, t_prev and the last output
     cum_prev = np.zeros(R.N_CUM)
     cum_last = np.zeros(R.N_CUM)
@@ -398,18 +430,40 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             fill_failure_info(info, t, limiting, st, pr, cfl / rmax if rmax > 0.0 else 0.0)
             status = L.ERR_STEPS if steps >= max_steps else L.ERR_WALL
             break
+        if capillary_mode == L.CAP_BUDGETED and steps >= switch_after:
+            # the budget step: the remaining PV in BUDGET_IMPLICIT_SHARE of the remaining steps, never below its
+            # value at the share; oleic wave speeds above its CFL speed are taken by the implicit release
+            step_b = (t_end - t) / (BUDGET_IMPLICIT_SHARE * (max_steps - steps))
+            if budget_step == 0.0:
+                stats[ST_SWITCH_STEP] = step_b
+            budget_step = max(stats[ST_SWITCH_STEP], step_b)
+            release_speed = cfl * dx / budget_step
         smax = 0.0
         dmax = 0.0
         for i in range(n):
-            if pr[L.SPEED, i] > smax:
-                smax = pr[L.SPEED, i]
+            speed = pr[L.SPEED, i]
+            if pr[L.WAVE_O, i] > release_speed:
+                speed = max(pr[L.SPEED_X, i], release_speed)
+            if speed > smax:
+                smax = speed
             if capillary and capillary_mode != L.CAP_IMPLICIT and pr[L.DCAP, i] > dmax:
                 dmax = pr[L.DCAP, i]
         rate = smax / dx + 2.0 * dmax / (dx * dx)
         dt_stable = cfl / rate if rate > 0.0 else np.inf
+        if (capillary and capillary_mode == L.CAP_BUDGETED and not switched and steps >= switch_after
+                and 2.0 * dmax / dx > smax):
+            # the explicit diffusion limit would carry the run past its budget: the adaptive rule from here, at
+            # the switch step that leaves (1 - BUDGET_IMPLICIT_SHARE) of the remaining steps to the wave speed
+            switched = True
+            stats[ST_SWITCH_AT] = steps
+        if switched:
+            switch_step = budget_step
         implicit_step = capillary and (capillary_mode == L.CAP_IMPLICIT
-                                       or (capillary_mode == L.CAP_ADAPTIVE and dt_stable < switch_step))
+                                       or ((capillary_mode == L.CAP_ADAPTIVE or switched)
+                                           and dt_stable < switch_step))
         if implicit_step:
+            if switched and stats[ST_SWITCH_PV] < 0.0:
+                stats[ST_SWITCH_PV] = t
             # the advective step, shortened by the saturation-change control (implicit mode) or to the switch step
             dt_stable = cfl / (smax / dx) if smax > 0.0 else np.inf
             if capillary_mode == L.CAP_IMPLICIT:
@@ -436,10 +490,14 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
 
         # ---- fluxes and explicit update, halving the step until no component goes negative
         bad = -1
+        n_release = 0
         for _ in range(MAX_HALVINGS):
             lam = dt / dx
             T.advective_fluxes(pr, n, tvd, lam, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug], inj[1, slug],
                                inj[2, slug], inj[3, slug], flux)
+            n_release = 0
+            if budget_step > 0.0:
+                n_release, fc_out = T.implicit_release_fluxes(pr, n, lam, cfl, flux)
             if capillary and not implicit_step:
                 T.capillary_fluxes(pr, n, dx, k_over_ul, flux)
             for r in range(6):
@@ -469,9 +527,16 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             T.solve_dispersion(d_stor, d_conc, d_coef, n, lamd, work_c, work_d, jd)
             apply_dispersion(st, n, lamd, jd)
 
+        if n_release > 0:
+            stats[ST_RELEASE] += n_release
+            if stats[ST_RELEASE_PV] < 0.0:
+                stats[ST_RELEASE_PV] = t
+
         # ---- bookkeeping
         pcx = int(pr[L.PCX, n - 1])
         f_c = pr[L.F1, n - 1] if pcx == 1 else (pr[L.F1 + 2, n - 1] if pcx == 3 else 0.0)
+        if n_release > 0 and fc_out >= 0.0:
+            f_c = fc_out  # the released outlet cell's carrier fraction
         for r in range(6):
             totals[1, r] += flux[r, 0] * dt
             totals[2, r] += flux[r, n] * dt

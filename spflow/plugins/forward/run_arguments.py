@@ -16,12 +16,15 @@ from .parameters import resolve_params
 from .injected_viscosity_cap import check_injected_viscosity
 from .schedule import as_schedule
 
-__all__ = ["SCHEMES", "CAPILLARY", "MAX_CELLS", "output_grid", "common_grid", "validate_run"]
+__all__ = ["SCHEMES", "CAPILLARY", "DEFAULT_CAPILLARY", "MAX_CELLS", "output_grid", "common_grid", "validate_run"]
 
 #: transport schemes: name -> second order (TVD) or not
 SCHEMES = {"tvd": True, "upwind": False}
 #: capillary time discretisations: name -> the kernel's capillary mode
-CAPILLARY = {"explicit": L.CAP_EXPLICIT, "implicit": L.CAP_IMPLICIT, "adaptive": L.CAP_ADAPTIVE}
+CAPILLARY = {"budgeted": L.CAP_BUDGETED, "explicit": L.CAP_EXPLICIT, "implicit": L.CAP_IMPLICIT,
+             "adaptive": L.CAP_ADAPTIVE}
+#: the default capillary time discretisation (simulate's and the forward stage's)
+DEFAULT_CAPILLARY = "budgeted"
 #: the largest 1-D grid
 MAX_CELLS = 20000
 

@@ -16,8 +16,9 @@ from . import effects as E
 from . import state_layout as L
 from .errors import SimulationError
 from .budgets import resolve_budgets, wall_clock_flag
+from . import kernel_inputs as K
 from .kernel_inputs import build_kernel_params, slug_flow
-from .run_arguments import CAPILLARY, SCHEMES, common_grid, output_grid, validate_run
+from .run_arguments import CAPILLARY, DEFAULT_CAPILLARY, SCHEMES, common_grid, output_grid, validate_run
 
 __all__ = ["simulate", "output_grid", "common_grid"]
 
@@ -35,9 +36,34 @@ def kernel_arguments(sched, resolved, strengths, pv_step):
     return build_kernel_params(resolved, strengths), end_pv, inj, flow, out_pv
 
 
+def switch_record(capillary, switch_pv, switch_at, switch_step, max_steps, pc_on):
+    """The attrs ``capillary_implicit_from_pv`` (PV of the first implicit capillary step of the budgeted mode, NaN
+    if it took none) and ``capillary_switch`` (why and where, or why not) of a run."""
+    from .kernel import BUDGET_EXPLICIT_SHARE, BUDGET_IMPLICIT_SHARE
+
+    rule = (f"at step {switch_at} of max_steps = {max_steps} ({BUDGET_EXPLICIT_SHARE:g} of the step budget used, "
+            f"the explicit diffusion limit setting the step) the capillary mode switched to the implicit step "
+            f"wherever the explicit one is below the switch step, {switch_step:.3g} PV then (the remaining PV in "
+            f"{BUDGET_IMPLICIT_SHARE:g} of the remaining steps, recomputed every step)")
+    if switch_pv >= 0.0:
+        text = f"explicit capillary flux until {switch_pv:.6g} PV, the first implicit capillary step: {rule}"
+        return {"capillary_implicit_from_pv": float(switch_pv), "capillary_switch": text}
+    if switch_at >= 0:
+        text = f"none: {rule}, but the explicit step never fell below it (the run is the explicit one)"
+    elif capillary != "budgeted":
+        text = (f"none: only capillary = 'budgeted' switches (this run: {capillary!r}, its implicit capillary steps "
+                f"in n_capillary_implicit)")
+    elif not pc_on:
+        text = "none: capillary pressure is off"
+    else:
+        text = (f"none: the explicit flux throughout (its diffusion limit did not set a step after "
+                f"{BUDGET_EXPLICIT_SHARE:g} of max_steps = {max_steps})")
+    return {"capillary_implicit_from_pv": float("nan"), "capillary_switch": text}
+
+
 def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv_step=0.01, profiles_at=None,
              cfl=0.5, permeability=None, alpha_t_ratio=None, pressure_every=None, pressure_solver=None,
-             max_steps=None, max_wall_s=None, capillary="explicit"):
+             max_steps=None, max_wall_s=None, capillary=DEFAULT_CAPILLARY):
     """Run one SP coreflood and return an ``xarray.Dataset``.
 
     Parameters
@@ -69,14 +95,22 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         step and wall-time budgets of the run (1-D only; ``budgets`` module): ``None`` is 50 x the expected steps
         ``ceil(total_pv * cells * 4 / cfl)`` and 600 s. Exceeding either raises ``SimulationError``.
     capillary:
-        time discretisation of the capillary flux when the ``capillary_pressure`` effect is on (1-D only):
-        ``"explicit"`` (default: forward Euler with the step limit ``dx^2 / (2 max D_cap)``), ``"implicit"``
-        (linearised backward Euler, operator split after the advection, no step limit of its own) or
-        ``"adaptive"`` (the explicit flux while its step limit is at least the CFL step of a wave of 100 PV^-1,
+        time discretisation of the capillary flux when the ``capillary_pressure`` effect is on, and the step
+        control past half the step budget (1-D only): ``"budgeted"`` (default: the explicit scheme, bit for bit, in
+        every run that finishes within half its step budget; past that, the budget step -- the remaining PV in half
+        the remaining steps -- is the adaptive rule's switch step from the first step the explicit diffusion limit
+        sets, and oleic waves faster than it allows take the implicit release of oil near a residual, with or
+        without Pc; recorded in the attrs ``capillary_implicit_from_pv``, ``capillary_switch``,
+        ``n_oil_release_implicit`` and ``oil_release_implicit_from_pv``), ``"explicit"`` (forward Euler with the
+        step limit ``dx^2 / (2 max D_cap)`` and the full wave-speed CFL on every step, however many steps it takes),
+        ``"implicit"`` (linearised backward Euler, operator split after the advection, no step limit of its own)
+        or ``"adaptive"`` (the explicit flux while its step limit is at least the CFL step of a wave of 100 PV^-1,
         25 x the speed of the budget's expected steps; the implicit step at that step where the explicit one would
-        be shorter, so capillarity never costs more than half the default step budget). The implicit and adaptive
-        modes are opt-in: against a time-converged reference they are less accurate than the explicit flux on
-        strongly capillary BCF runs (docs/forward_model.md, "Capillary time step"). No effect with Pc off.
+        be shorter, so capillarity never costs more than half the default step budget). Against a time-converged
+        reference the implicit and adaptive modes are less accurate than the explicit flux on strongly capillary
+        BCF runs (docs/forward_model.md, "Capillary time step"); the budgeted mode is the explicit flux there. Only
+        the budgeted mode acts with Pc off (its oil release); 2-D runs (no capillary flux, no step budget) accept
+        ``"budgeted"`` and ``"explicit"``.
 
     Returns
     -------
@@ -89,7 +123,10 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     ``n_halvings`` (retried steps), ``n_capillary_limited`` (steps whose step the capillary term set: the
     saturation-change limit of the implicit step, the switch step of the adaptive mode, the diffusion limit of the
     explicit flux), ``n_ramp_limited`` (steps capped by the ramp after a slug start) and ``n_capillary_implicit``
-    (steps taken with the implicit capillary step) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
+    (steps taken with the implicit capillary step), ``capillary_implicit_from_pv`` (the PV of the budgeted mode's
+    first implicit capillary step; NaN if it took none), ``capillary_switch`` (why and where, or why not),
+    ``n_oil_release_implicit`` (cell-steps of the budgeted mode's implicit release of oil) and
+    ``oil_release_implicit_from_pv`` (the PV of the first; NaN if none) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
     sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
@@ -109,8 +146,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         if max_steps is not None or max_wall_s is not None:
             raise ParameterError("max_steps and max_wall_s are available in 1-D runs only (cells an integer, no "
                                  "2-D arguments)")
-        if capillary != "explicit":
-            raise ParameterError("capillary is available in 1-D runs only (cells an integer, no 2-D arguments)")
+        if capillary not in ("budgeted", "explicit"):
+            raise ParameterError(f"capillary = {capillary!r} is available in 1-D runs only (cells an integer, no 2-D "
+                                 "arguments); 2-D runs have no capillary flux and accept 'budgeted' or 'explicit'")
 
         return simulate2d(schedule, params, cells=cells, effects=effects, scheme=scheme, pv_step=pv_step,
                           profiles_at=profiles_at, cfl=cfl, **{k: v for k, v in two_d.items() if v is not None})
@@ -121,6 +159,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     )
     max_steps, max_wall_s = resolve_budgets(max_steps, max_wall_s, sched.total_pv, cells, cfl)
     from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_IMPLICIT, ST_RAMP, run_kernel  # numba: imported at a run
+    from .kernel import ST_RELEASE, ST_RELEASE_PV, ST_SWITCH_AT, ST_SWITCH_PV, ST_SWITCH_STEP
     from .outputs import build_dataset
 
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
@@ -140,6 +179,10 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
              "n_steps": int(n_steps), "wall_time_s": wall, "max_steps": max_steps, "max_wall_s": max_wall_s,
              "n_halvings": int(stats[ST_HALVINGS]), "n_capillary_limited": int(stats[ST_CAPILLARY]),
              "n_ramp_limited": int(stats[ST_RAMP]), "n_capillary_implicit": int(stats[ST_IMPLICIT])}
+    attrs.update(switch_record(capillary, stats[ST_SWITCH_PV], int(stats[ST_SWITCH_AT]), stats[ST_SWITCH_STEP],
+                               max_steps, prm[K.PC0] > 0.0))
+    attrs["n_oil_release_implicit"] = int(stats[ST_RELEASE])
+    attrs["oil_release_implicit_from_pv"] = float(stats[ST_RELEASE_PV]) if stats[ST_RELEASE] > 0 else float("nan")
     if sched.has_rates:
         attrs["slug_rate_ml_min"] = [float(r) for r in sched.rates_ml_min(resolved["QINJ"])]
     attrs.update({f"param_{k}": v for k, v in resolved.items()})

@@ -16,6 +16,12 @@ Failure policy: a sample whose run of any experiment raises ``SimulationError`` 
 wall-time budget exhausted, ``budgets``) does not abort the stage: its rows are NaN for every experiment and the
 ``failure`` variable (dim ``sample``) holds the reason (``"<experiment>: <message>"``; ``""`` for a sample that
 ran). The stage warns with the count; stages consuming the responses drop failed samples and say how many.
+
+Step control: the default ``capillary = "budgeted"`` is simulate's (the explicit scheme in every run inside half its
+step budget; past it, the implicit capillary step and the implicit release of oil where the explicit limits would
+exceed the budget); the optional variables ``capillary_implicit_from_pv`` and ``oil_release_implicit_from_pv``
+(dims ``sample``, ``experiment``) hold the PV of a run's first implicit capillary step and first implicit release
+(NaN where it took none, and for failed samples), so a run that left the explicit scheme is visible in the output.
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ from spflow.plugins.forward.budgets import DEFAULT_MAX_WALL_S
 from spflow.plugins.forward.errors import SimulationError
 from spflow.plugins.forward.experiments import forward_experiments
 from spflow.plugins.forward.numba_cache import source_digest
-from spflow.plugins.forward.run_arguments import validate_run
+from spflow.plugins.forward.run_arguments import CAPILLARY, DEFAULT_CAPILLARY, validate_run
 from spflow.plugins.forward.simulate import common_grid, simulate
 
 #: Response variables of the simulator and their units.
@@ -64,7 +70,16 @@ RESPONSES = DatasetSchema(
     }
     | {"total_pv": Variable(("experiment",), units="1", long_name="pore volumes injected in the coreflood"),
        "failure": Variable(("sample",), kind="UO", required=False, long_name="why the sample's run failed",
-                           doc="why a sample's run failed (its rows are NaN); empty for a sample that ran")},
+                           doc="why a sample's run failed (its rows are NaN); empty for a sample that ran"),
+       "capillary_implicit_from_pv": Variable(("sample", "experiment"), units="1", required=False, allow_nan=True,
+                                              long_name="injected PV from which the run took the implicit "
+                                                        "capillary step",
+                                              doc="simulate's attr of that name: NaN where the run kept the "
+                                                  "explicit capillary flux (or failed)"),
+       "oil_release_implicit_from_pv": Variable(("sample", "experiment"), units="1", required=False, allow_nan=True,
+                                                long_name="injected PV of the run's first implicit release of oil",
+                                                doc="simulate's attr of that name: NaN where the run took none (or "
+                                                    "failed)")},
     doc="simulated coreflood responses",
 )
 
@@ -84,7 +99,7 @@ def _run_sample(experiments, fixed, row, cells, effects, scheme, pv_step, max_st
 
 class Forward(Stage):
     name = "forward"
-    version = "4"
+    version = "5"
     description = "SP coreflood simulator over a design and a set of experiments"
     inputs = {"design": DESIGN}
     optional_inputs = frozenset({"design"})
@@ -101,9 +116,10 @@ class Forward(Stage):
                            doc="step budget of each run; 0: simulate's default (50 x the expected steps)"),
         "max_wall_s": Param(float, DEFAULT_MAX_WALL_S, bounds=(1e-3, None), unit="s",
                             doc="wall-time budget of each run"),
-        "capillary": Param(str, "explicit", choices=["explicit", "implicit", "adaptive"],
+        "capillary": Param(str, DEFAULT_CAPILLARY, choices=list(CAPILLARY),
                            doc="time discretisation of the capillary flux when capillary_pressure is on (simulate's "
-                               "capillary; docs/forward_model.md)"),
+                               "capillary: budgeted = the explicit scheme unless a run would need more than half its "
+                               "step budget; docs/forward_model.md)"),
     }
 
     @classmethod
@@ -139,6 +155,8 @@ class Forward(Stage):
         total = np.array([e.schedule.total_pv for e in experiments])
         grid, positions = common_grid(total, self.params["pv_step"])
         data = {name: np.full((len(rows), len(experiments), grid.size), np.nan) for name in RESPONSE_UNITS}
+        switch_pv = np.full((len(rows), len(experiments)), np.nan)
+        release_pv = np.full((len(rows), len(experiments)), np.nan)
         failure = np.array([r if isinstance(r, str) else "" for r in runs], dtype=object)
         n_failed = int(np.count_nonzero(failure != ""))
         if n_failed:
@@ -149,12 +167,16 @@ class Forward(Stage):
             if isinstance(sample_runs, str):
                 continue
             for j, ds in enumerate(sample_runs):
+                switch_pv[i, j] = ds.attrs["capillary_implicit_from_pv"]
+                release_pv[i, j] = ds.attrs["oil_release_implicit_from_pv"]
                 for name in RESPONSE_UNITS:
                     data[name][i, j, positions[j]] = ds[name].values
         out = xr.Dataset(
             {name: (("sample", "experiment", "pv"), values, {"units": RESPONSE_UNITS[name]})
              for name, values in data.items()}
-            | {"total_pv": ("experiment", total, {"units": "1"}), "failure": ("sample", failure.astype(str))},
+            | {"total_pv": ("experiment", total, {"units": "1"}), "failure": ("sample", failure.astype(str)),
+               "capillary_implicit_from_pv": (("sample", "experiment"), switch_pv, {"units": "1"}),
+               "oil_release_implicit_from_pv": (("sample", "experiment"), release_pv, {"units": "1"})},
             coords={"sample": ("sample", np.arange(len(rows)), {"units": "1", "long_name": "sample number"}),
                     "experiment": ("experiment", [e.name for e in experiments], {"long_name": "coreflood"}),
                     "pv": ("pv", grid, {"units": "1", "long_name": "injected pore volumes"})},

@@ -39,7 +39,9 @@ NEXP = 43  # Corey exponent n_l (Eq. 2.13)
 SBAR = 46  # normalized saturation (Eq. 1.7), 0 for an absent phase
 WINDOW = 49  # 1 - S1r - S2r - S3r
 DPCDS = 50  # |dPc/dS| of the carrier (wetting) phase saturation (Pa), 0 where Pc is off or capped
-NPR = 51
+WAVE_O = 51  # the oleic term of the wave-speed bound: df_o/dS_o (PV units)
+SPEED_X = 52  # the step's speed bound without WAVE_O (``SPEED = max(SPEED_X, WAVE_O)``)
+NPR = 53
 
 # error codes returned by the kernel
 OK = 0
@@ -53,3 +55,4 @@ ERR_WALL = 5
 CAP_EXPLICIT = 0  # forward Euler with the diffusion limit dx^2 / (2 D_cap) on every step
 CAP_IMPLICIT = 1  # the linearly implicit step on every step, at the advective step (saturation-change control)
 CAP_ADAPTIVE = 2  # explicit while its diffusion limit is affordable, the implicit step where it is not
+CAP_BUDGETED = 3  # explicit until a share of the step budget is used, then the budget step (adaptive Pc, oil release)

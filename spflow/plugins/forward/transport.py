@@ -17,6 +17,10 @@ second order in space and time; at extrema it falls back to upwind. As ``0 <= ps
 scheme is TVD for Courant numbers up to 1/2 whatever ``nu`` in [0, 1] the factor uses, which the time step
 guarantees (``cfl <= 0.5``). The first interior face and the producer face are first order.
 
+Implicit release of oil (``implicit_release_fluxes``; the kernel's budgeted mode past its share of the step budget):
+the outflow faces of cells whose oleic Courant number exceeds the limit take the linearised backward-Euler upwind
+oleic fraction, swept from the inlet, so the step need not resolve a fast oleic wave that carries almost no oil.
+
 Dispersion (``solve_dispersion``; Eq. 1.9 per phase, summed over phases for each carried species): backward
 Euler in the species' carrier concentration (a tridiagonal M-matrix, unconditionally stable and positivity
 preserving), written back as conservative face fluxes, with no dispersive flux through the injector and producer
@@ -57,24 +61,74 @@ def _lw_factor(courant, speed):
 
 
 @njit(cache=True, error_model="numpy")
-def upwind_cell_fluxes(pr, i, out, j):
-    """First-order fluxes of face ``j`` from cell ``i``."""
+def phase_fraction_fluxes(pr, i, f0, f1, f2, out, j):
+    """Fluxes of face ``j`` carrying the phase fractional flows ``f0, f1, f2`` with the compositions of cell ``i``;
+    returns the fraction of the polymer-carrying phase."""
     fw = 0.0
     fo = 0.0
     fs = 0.0
     for l in range(3):
-        f = pr[L.F1 + l, i]
+        f = f0 if l == 0 else (f1 if l == 1 else f2)
         fo += f * pr[L.C2P + l, i]
         fs += f * pr[L.C3P + l, i]
         fw += f * (1.0 - pr[L.C2P + l, i] - pr[L.C3P + l, i])
     pcx = int(pr[L.PCX, i])
-    fc = pr[L.F1, i] if pcx == 1 else (pr[L.F1 + 2, i] if pcx == 3 else 0.0)
+    fc = f0 if pcx == 1 else (f2 if pcx == 3 else 0.0)
     out[FW, j] = fw
     out[FO, j] = fo
     out[FS, j] = fs
     out[FP, j] = fc * pr[L.CP, i]
     out[FA, j] = fw * pr[L.C5, i]
     out[FD, j] = fw * pr[L.C6, i]
+    return fc
+
+
+@njit(cache=True, error_model="numpy")
+def upwind_cell_fluxes(pr, i, out, j):
+    """First-order fluxes of face ``j`` from cell ``i``."""
+    phase_fraction_fluxes(pr, i, pr[L.F1, i], pr[L.F1 + 1, i], pr[L.F1 + 2, i], out, j)
+
+
+@njit(cache=True, error_model="numpy")
+def implicit_release_fluxes(pr, n, lam, cfl, out):
+    """Replace the outflow face fluxes of every cell whose oleic Courant number ``lam * WAVE_O`` exceeds ``cfl``
+    with the linearised backward-Euler upwind ones (the stiff release of oil near a residual, docs/forward_model.md).
+
+    The total velocity is positive, so implicit upwind transport solves cell by cell from the inlet. Linearising the
+    oleic fractional flow of cell ``i`` about the step start, ``f(S) ~ f^n + c (S - S^n)`` with ``c = df_o/dS_o``,
+    the backward-Euler update ``S - S^n = -lam (f(S) - F_in)`` gives the outflow
+
+        F = (f^n + lam c F_in) / (1 + lam c),
+
+    a weighted mean of the cell's explicit oleic fraction and the oleic fraction entering it (``F_in``: 0 at the
+    injector, the released fraction of a released upstream cell, else the upstream cell's own, its face then first
+    order). The other phases keep their ratios, scaled to a total of 1; the components go with the cell's phase
+    compositions, so the update stays conservative. Returns ``(cells released, carrier fraction at the producer
+    face or -1 if the last cell was not released)``."""
+    count = 0
+    f_up = -1.0  # released oleic fraction of the upstream cell (-1: not released)
+    fc_out = -1.0
+    for i in range(n):
+        c = pr[L.WAVE_O, i]
+        if not (lam * c > cfl and pr[L.F1 + 1, i] < 1.0):
+            f_up = -1.0
+            continue
+        count += 1
+        if i == 0:
+            f_in = 0.0
+        elif f_up >= 0.0:
+            f_in = f_up
+        else:
+            upwind_cell_fluxes(pr, i - 1, out, i)
+            f_in = pr[L.F1 + 1, i - 1]
+        f_o = pr[L.F1 + 1, i]
+        f_new = (f_o + lam * c * f_in) / (1.0 + lam * c)
+        scale = (1.0 - f_new) / (1.0 - f_o)
+        fc = phase_fraction_fluxes(pr, i, pr[L.F1, i] * scale, f_new, pr[L.F1 + 2, i] * scale, out, i + 1)
+        if i == n - 1:
+            fc_out = fc
+        f_up = f_new
+    return count, fc_out
 
 
 @njit(cache=True, error_model="numpy")
