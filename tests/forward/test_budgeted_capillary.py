@@ -1,8 +1,8 @@
 """The budgeted mode (``capillary="budgeted"``, the default): the explicit scheme, bit for bit, in every run that
 finishes within ``BUDGET_EXPLICIT_SHARE`` of its step budget; past that share, the budget step -- the remaining PV
 in ``BUDGET_IMPLICIT_SHARE`` of the remaining steps -- bounds the two stiff terms: the capillary flux takes the
-adaptive rule (implicit capillary step) where the explicit diffusion limit is shorter, and oleic waves faster than
-the budget step allows take the implicit release (``transport.implicit_release_fluxes``).
+adaptive rule (implicit capillary step) where the explicit diffusion limit is shorter, and waves faster than the
+budget step allows of a phase near its residual take the implicit release (``transport.implicit_release_fluxes``).
 
 References are computed here: the explicit mode run in the same test -- an independent path only while the budgeted
 run did not switch, so every identity test also asserts that it did not -- the outputs' own balances (profiles plus
@@ -44,6 +44,7 @@ def assert_no_switch(ds):
     assert ds.attrs["capillary_switch"].startswith("none")
     assert ds.attrs["n_capillary_implicit"] == 0
     assert ds.attrs["n_oil_release_implicit"] == 0 and np.isnan(ds.attrs["oil_release_implicit_from_pv"])
+    assert ds.attrs["n_non_oleic_release_implicit"] == 0
 
 
 @pytest.mark.parametrize("schedule", ["BCF1", "BCF2", "BCF3"])
@@ -201,10 +202,11 @@ def test_the_release_sweep_is_the_linearised_backward_euler_upwind_update():
     pr[L.CP] = 0.5
     pr[L.C5] = 0.1
     pr[L.C6] = 0.01
-    pr[L.WAVE_O] = [100.0, 100.0, 0.1]  # lam c = 10, 10, 0.01
+    pr[L.WAVE_R] = [100.0, 100.0, 0.1]  # lam c = 10, 10, 0.01
+    pr[L.REL] = 1.0  # the oleic phase
     out = np.full((T.NFLUX, n + 1), 7.0)
-    count, fc_out = T.implicit_release_fluxes(pr, n, lam, cfl, out)
-    assert count == 2 and fc_out == -1.0
+    count, count_non_oleic, fc_out = T.implicit_release_fluxes(pr, n, lam, cfl, out)
+    assert count == 2 and count_non_oleic == 0 and fc_out == -1.0
     big_f0 = (0.1 + 10.0 * 0.0) / 11.0
     big_f1 = (0.05 + 10.0 * big_f0) / 11.0
     for j, big in ((1, big_f0), (2, big_f1)):
@@ -217,10 +219,57 @@ def test_the_release_sweep_is_the_linearised_backward_euler_upwind_update():
     assert np.all(out[:, 0] == 7.0) and np.all(out[:, 3] == 7.0)
 
 
+def test_the_release_sweep_of_an_aqueous_or_microemulsion_phase():
+    """``implicit_release_fluxes`` on four hand-made three-phase cells (aqueous: water; oleic: oil; microemulsion:
+    half water, 0.3 oil, 0.2 surfactant) whose release phase is not the oleic one: cell 0 releases its aqueous phase
+    (the injector brings no oil, so its inflow is the cell's aqueous share of the non-oleic flow, 0.3 / 0.9), cell 1
+    its microemulsion (inflow: cell 0's released microemulsion fraction), cell 2 is below the limit (its outflow face
+    first-order upwind), cell 3 releases its aqueous phase (inflow: cell 2's aqueous fraction) and is the outlet
+    (the carrier fraction returned). Hand values: ``F = (f + lam c F_in) / (1 + lam c)``, the other two phases
+    scaled by ``(1 - F) / (1 - f)``, every component with the phase compositions."""
+    n, lam, cfl = 4, 0.1, 0.5
+    f = np.array([[0.3, 0.1, 0.6], [0.5, 0.2, 0.3], [0.4, 0.1, 0.5], [0.2, 0.3, 0.5]])  # cells x phases
+    pr = np.zeros((L.NPR, n))
+    for l in range(3):
+        pr[L.F1 + l] = f[:, l]
+    pr[L.C1P] = 1.0
+    pr[L.C2P + 1] = 1.0
+    pr[L.C1P + 2], pr[L.C2P + 2], pr[L.C3P + 2] = 0.5, 0.3, 0.2
+    pr[L.PCX] = 1.0  # polymer in the aqueous phase
+    pr[L.CP] = 0.5
+    pr[L.C5] = 0.1
+    pr[L.REL] = [0.0, 2.0, 0.0, 0.0]
+    pr[L.WAVE_R] = [100.0, 100.0, 0.1, 50.0]  # lam c = 10, 10, 0.01, 5
+    out = np.full((T.NFLUX, n + 1), 7.0)
+    count, count_non_oleic, fc_out = T.implicit_release_fluxes(pr, n, lam, cfl, out)
+
+    def released(i, l, f_in, lc):
+        big = (f[i, l] + lc * f_in) / (1.0 + lc)
+        phases = f[i] * (1.0 - big) / (1.0 - f[i, l])
+        phases[l] = big
+        return phases
+
+    face1 = released(0, 0, 0.3 / 0.9, 10.0)
+    face2 = released(1, 2, face1[2], 10.0)
+    face3 = f[2]  # cell 2's own fractions, first order
+    face4 = released(3, 0, f[2, 0], 5.0)
+    assert count == 3 and count_non_oleic == 3 and fc_out == pytest.approx(face4[0], rel=1e-14)
+    for j, (a, o, m) in ((1, face1), (2, face2), (3, face3), (4, face4)):
+        water = a + 0.5 * m
+        assert out[T.FW, j] == pytest.approx(water, rel=1e-14)
+        assert out[T.FO, j] == pytest.approx(o + 0.3 * m, rel=1e-14)
+        assert out[T.FS, j] == pytest.approx(0.2 * m, rel=1e-14)
+        assert out[T.FP, j] == pytest.approx(0.5 * a, rel=1e-14)
+        assert out[T.FA, j] == pytest.approx(0.1 * water, rel=1e-14)
+        assert out[T.FW, j] + out[T.FO, j] + out[T.FS, j] == pytest.approx(1.0, rel=1e-14)
+    assert np.all(out[:, 0] == 7.0)
+
+
 def test_a_run_past_half_its_budget_releases_oil_implicitly_and_finishes():
     """BCF1 on 30 cells with a budget of 500 steps (the explicit scheme needs about 600): the explicit mode stops
-    with the budget error; the budgeted mode, past half its budget, takes the oleic waves above the budget step's
-    speed with the implicit release and finishes inside the budget -- identical to the explicit run before its
+    with the budget error; the budgeted mode, past half its budget, takes the waves above the budget step's speed
+    with the implicit release -- of oil, and of the aqueous or microemulsion phase where its mobility derivative is
+    the largest, microemulsion present -- and finishes inside the budget -- identical to the explicit run before its
     first release, all six components balanced to 1e-10, oil from the outputs, in bounds, and within 0.02 in
     recovery (0.01 at the end) of the explicit run with the default budget (first-order implicit steps, on average
     1.5 x the explicit ones, over the last 60 % of the flood)."""
@@ -232,6 +281,8 @@ def test_a_run_past_half_its_budget_releases_oil_implicitly_and_finishes():
     assert ds.attrs["n_steps"] <= 500 and ds.attrs["n_halvings"] == 0
     first = ds.attrs["oil_release_implicit_from_pv"]
     assert ds.attrs["n_oil_release_implicit"] > 0 and 0.0 < first < BCF_SCHEDULES["BCF1"].total_pv
+    assert ds.attrs["n_non_oleic_release_implicit"] > 0
+    assert np.any(ds.sme.sel(profile_pv=2.0).values > 0.0)  # released from 1.6 PV: a microemulsion at 2 PV
     before = ds.pv.values < first
     assert before.sum() >= 5
     for var in ("dp", "oil_cut", "recovery", "c_polymer_out", "c_surfactant_out", "salinity_out"):

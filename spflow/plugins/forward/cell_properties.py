@@ -423,12 +423,28 @@ def _mobilities(st, pr, prm, n):
         pr[L.V1 + 2, i] = v2
         v_bound = max(max(v0, v2) / e_min, v1)
         speed = max(speed, v_bound)
-        # the oleic wave speed and the bound without it (``transport.implicit_release_fluxes``): with the oleic phase
-        # and one other, that phase's term is the oleic one (df_w/dS_w = df_o/dS_o), so only the phase velocities
-        # remain; with three phases, the other two terms
-        pr[L.WAVE_O, i] = wave_o
-        two_phase_oleic = sat1 > 0.0 and (sat0 > 0.0) != (sat2 > 0.0)
-        pr[L.SPEED_X, i] = v_bound if two_phase_oleic else max(wave_a, wave_m, v_bound)
+        # the release phase (``transport.implicit_release_fluxes``): the present phase with the largest mobility
+        # derivative, whose column of the fractional-flow Jacobian (d f_k / d S_l = (delta_kl - f_k) dl_l / lam_t)
+        # dominates the bound; its term, and the bound without its column: with two phases, the other phase's
+        # term is the same derivative (df_k/dS_k = df_l/dS_l), so only the phase velocities remain; with three,
+        # every term less its entry in that column
+        rel = 0
+        dl_rel = dl0 if sat0 > 0.0 else -1.0
+        if sat1 > 0.0 and dl1 > dl_rel:
+            rel = 1
+            dl_rel = dl1
+        if sat2 > 0.0 and dl2 > dl_rel:
+            rel = 2
+            dl_rel = dl2
+        pr[L.REL, i] = rel
+        pr[L.WAVE_R, i] = wave_a if rel == 0 else (wave_o if rel == 1 else wave_m)
+        if sat0 > 0.0 and sat1 > 0.0 and sat2 > 0.0:
+            col = dl_rel / lam_t
+            pr[L.SPEED_X, i] = max(wave_a - ((1.0 - f0) if rel == 0 else f0) * col,
+                                   wave_o - ((1.0 - f1) if rel == 1 else f1) * col,
+                                   wave_m - ((1.0 - f2) if rel == 2 else f2) * col, v_bound)
+        else:
+            pr[L.SPEED_X, i] = v_bound
 
         # dispersion coefficients (PV units): phi S_l K_l / (u L) = alpha_l f_l / L + phi S_l D / (u L)
         k0 = prm[K.ALPHA_D] * f0 + dm * sat0

@@ -19,10 +19,11 @@ Per step (all in pore-volume units, see ``transport``):
    the switch step (or the advective step if that is shorter); the budgeted mode is the explicit scheme until
    ``BUDGET_EXPLICIT_SHARE`` of the step budget is used; from then on the budget step -- the remaining PV in
    ``BUDGET_IMPLICIT_SHARE`` of the remaining steps, recomputed every step, never below its value at the share --
-   is the adaptive mode's switch step (from the first step the diffusion limit sets), and oleic wave speeds above
-   the budget step's CFL speed leave the step to the other speeds and take the implicit release of oil
-   (``transport.implicit_release_fluxes``: linearised backward-Euler upwind outflow of the cells whose oleic Courant
-   number exceeds ``cfl``). The step is capped by a ramp
+   is the adaptive mode's switch step (from the first step the diffusion limit sets), and release-phase wave speeds
+   above the budget step's CFL speed leave the step to the other speeds and take the implicit release
+   (``transport.implicit_release_fluxes``: linearised backward-Euler upwind outflow of the cells whose Courant
+   number of the phase with the largest mobility derivative -- oil, water or microemulsion near its residual --
+   exceeds ``cfl``). The step is capped by a ramp
    from every slug start (``ramp_step``:
    the cell states do not yet span the wave that the newly injected fluid makes, so their speeds underestimate it),
    shortened to land exactly on slug ends and profile times. Output times never shorten a step, so the series do
@@ -47,8 +48,9 @@ halvings (``ST_HALVINGS``), the steps whose step was set by the capillary term r
 the steps capped by the ramp (``ST_RAMP``) and the steps taken with the implicit capillary step (``ST_IMPLICIT``);
 in the budgeted mode the step count at which it switched to the adaptive rule (``ST_SWITCH_AT``, -1 if it did not),
 the budget step at the share (``ST_SWITCH_STEP``, PV), the time of its first implicit capillary step
-(``ST_SWITCH_PV``, -1 if it took none), the cell-steps of the implicit release (``ST_RELEASE``) and the time of the
-first (``ST_RELEASE_PV``, -1 if none); a budgeted run with neither is the explicit run.
+(``ST_SWITCH_PV``, -1 if it took none), the cell-steps of the implicit release (``ST_RELEASE``; of them in the
+aqueous or microemulsion phase: ``ST_RELEASE_NON_OLEIC``) and the time of the first (``ST_RELEASE_PV``, -1 if
+none); a budgeted run with neither is the explicit run.
 ``totals[4, 6]`` holds, per component, the amount in place at the start, injected, produced and in place at the end
 (PV units), for the mass balance.
 """
@@ -70,8 +72,8 @@ N_PROFILE = 11
 N_INFO = 12
 # stats rows
 (ST_HALVINGS, ST_CAPILLARY, ST_RAMP, ST_IMPLICIT, ST_SWITCH_PV, ST_SWITCH_AT, ST_SWITCH_STEP, ST_RELEASE,
- ST_RELEASE_PV) = range(9)
-N_STATS = 9
+ ST_RELEASE_PV, ST_RELEASE_NON_OLEIC) = range(10)
+N_STATS = 10
 # dispersion rows
 D_ANION, D_DIVALENT, D_SURF, D_POLY = range(4)
 N_DISP = 4
@@ -98,7 +100,7 @@ CAPILLARY_SWITCH_SPEED = 100.0
 # BUDGET_EXPLICIT_SHARE of its step budget; past it, the budget step fits the remaining PV into
 # BUDGET_IMPLICIT_SHARE of the remaining steps (recomputed every step, never below its value at the share, so it
 # grows where other limits use up steps): the capillary switch step from the first step the explicit diffusion
-# limit sets, and the step below which fast oleic waves are released implicitly
+# limit sets, and the step below which fast waves of a phase near its residual are released implicitly
 BUDGET_EXPLICIT_SHARE = 0.5
 BUDGET_IMPLICIT_SHARE = 0.5
 
@@ -302,8 +304,8 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
     limit; ``CAP_IMPLICIT``: the linearly implicit capillary step on every step; ``CAP_ADAPTIVE``: explicit while
     the diffusion limit stays above the CFL step of a wave of speed ``CAPILLARY_SWITCH_SPEED``, implicit below;
     ``CAP_BUDGETED``: the explicit scheme until ``BUDGET_EXPLICIT_SHARE`` of ``max_steps`` is used, then the budget
-    step as the adaptive switch step, from the first step the diffusion limit sets, and the implicit release of oil
-    where an oleic wave is faster than the budget step allows -- with Pc off too).
+    step as the adaptive switch step, from the first step the diffusion limit sets, and the implicit release where
+    a release-phase wave is faster than the budget step allows -- with Pc off too).
 
     Each slug runs at its own rate: ``UT`` and ``T_PV`` of (a copy of) ``prm`` are those of the slug being injected,
     so the pressure drop, shear rate, trapping number, capillary and molecular-diffusion terms and the kinetic
@@ -432,7 +434,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             break
         if capillary_mode == L.CAP_BUDGETED and steps >= switch_after:
             # the budget step: the remaining PV in BUDGET_IMPLICIT_SHARE of the remaining steps, never below its
-            # value at the share; oleic wave speeds above its CFL speed are taken by the implicit release
+            # value at the share; release-phase wave speeds above its CFL speed are taken by the implicit release
             step_b = (t_end - t) / (BUDGET_IMPLICIT_SHARE * (max_steps - steps))
             if budget_step == 0.0:
                 stats[ST_SWITCH_STEP] = step_b
@@ -442,7 +444,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
         dmax = 0.0
         for i in range(n):
             speed = pr[L.SPEED, i]
-            if pr[L.WAVE_O, i] > release_speed:
+            if pr[L.WAVE_R, i] > release_speed:
                 speed = max(pr[L.SPEED_X, i], release_speed)
             if speed > smax:
                 smax = speed
@@ -491,13 +493,15 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
         # ---- fluxes and explicit update, halving the step until no component goes negative
         bad = -1
         n_release = 0
+        n_release_non_oleic = 0
         for _ in range(MAX_HALVINGS):
             lam = dt / dx
             T.advective_fluxes(pr, n, tvd, lam, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug], inj[1, slug],
                                inj[2, slug], inj[3, slug], flux)
             n_release = 0
+            n_release_non_oleic = 0
             if budget_step > 0.0:
-                n_release, fc_out = T.implicit_release_fluxes(pr, n, lam, cfl, flux)
+                n_release, n_release_non_oleic, fc_out = T.implicit_release_fluxes(pr, n, lam, cfl, flux)
             if capillary and not implicit_step:
                 T.capillary_fluxes(pr, n, dx, k_over_ul, flux)
             for r in range(6):
@@ -529,6 +533,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
 
         if n_release > 0:
             stats[ST_RELEASE] += n_release
+            stats[ST_RELEASE_NON_OLEIC] += n_release_non_oleic
             if stats[ST_RELEASE_PV] < 0.0:
                 stats[ST_RELEASE_PV] = t
 

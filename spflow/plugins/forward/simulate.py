@@ -99,9 +99,10 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         control past half the step budget (1-D only): ``"budgeted"`` (default: the explicit scheme, bit for bit, in
         every run that finishes within half its step budget; past that, the budget step -- the remaining PV in half
         the remaining steps -- is the adaptive rule's switch step from the first step the explicit diffusion limit
-        sets, and oleic waves faster than it allows take the implicit release of oil near a residual, with or
-        without Pc; recorded in the attrs ``capillary_implicit_from_pv``, ``capillary_switch``,
-        ``n_oil_release_implicit`` and ``oil_release_implicit_from_pv``), ``"explicit"`` (forward Euler with the
+        sets, and waves faster than it allows of a phase near its residual (oil, water or microemulsion) take the
+        implicit release, with or without Pc; recorded in the attrs ``capillary_implicit_from_pv``,
+        ``capillary_switch``, ``n_oil_release_implicit``, ``n_non_oleic_release_implicit`` and
+        ``oil_release_implicit_from_pv``), ``"explicit"`` (forward Euler with the
         step limit ``dx^2 / (2 max D_cap)`` and the full wave-speed CFL on every step, however many steps it takes),
         ``"implicit"`` (linearised backward Euler, operator split after the advection, no step limit of its own)
         or ``"adaptive"`` (the explicit flux while its step limit is at least the CFL step of a wave of 100 PV^-1,
@@ -125,8 +126,9 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     explicit flux), ``n_ramp_limited`` (steps capped by the ramp after a slug start) and ``n_capillary_implicit``
     (steps taken with the implicit capillary step), ``capillary_implicit_from_pv`` (the PV of the budgeted mode's
     first implicit capillary step; NaN if it took none), ``capillary_switch`` (why and where, or why not),
-    ``n_oil_release_implicit`` (cell-steps of the budgeted mode's implicit release of oil) and
-    ``oil_release_implicit_from_pv`` (the PV of the first; NaN if none) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
+    ``n_oil_release_implicit`` (cell-steps of the budgeted mode's implicit release of oil),
+    ``n_non_oleic_release_implicit`` (of the aqueous or microemulsion phase near its residual) and
+    ``oil_release_implicit_from_pv`` (the PV of the first release of either kind; NaN if none) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
     sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
@@ -159,7 +161,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     )
     max_steps, max_wall_s = resolve_budgets(max_steps, max_wall_s, sched.total_pv, cells, cfl)
     from .kernel import ST_CAPILLARY, ST_HALVINGS, ST_IMPLICIT, ST_RAMP, run_kernel  # numba: imported at a run
-    from .kernel import ST_RELEASE, ST_RELEASE_PV, ST_SWITCH_AT, ST_SWITCH_PV, ST_SWITCH_STEP
+    from .kernel import ST_RELEASE, ST_RELEASE_NON_OLEIC, ST_RELEASE_PV, ST_SWITCH_AT, ST_SWITCH_PV, ST_SWITCH_STEP
     from .outputs import build_dataset
 
     prm, end_pv, inj, flow, out_pv = kernel_arguments(sched, resolved, strengths, pv_step)
@@ -181,7 +183,8 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
              "n_ramp_limited": int(stats[ST_RAMP]), "n_capillary_implicit": int(stats[ST_IMPLICIT])}
     attrs.update(switch_record(capillary, stats[ST_SWITCH_PV], int(stats[ST_SWITCH_AT]), stats[ST_SWITCH_STEP],
                                max_steps, prm[K.PC0] > 0.0))
-    attrs["n_oil_release_implicit"] = int(stats[ST_RELEASE])
+    attrs["n_oil_release_implicit"] = int(stats[ST_RELEASE] - stats[ST_RELEASE_NON_OLEIC])
+    attrs["n_non_oleic_release_implicit"] = int(stats[ST_RELEASE_NON_OLEIC])
     attrs["oil_release_implicit_from_pv"] = float(stats[ST_RELEASE_PV]) if stats[ST_RELEASE] > 0 else float("nan")
     if sched.has_rates:
         attrs["slug_rate_ml_min"] = [float(r) for r in sched.rates_ml_min(resolved["QINJ"])]

@@ -39,9 +39,10 @@ NEXP = 43  # Corey exponent n_l (Eq. 2.13)
 SBAR = 46  # normalized saturation (Eq. 1.7), 0 for an absent phase
 WINDOW = 49  # 1 - S1r - S2r - S3r
 DPCDS = 50  # |dPc/dS| of the carrier (wetting) phase saturation (Pa), 0 where Pc is off or capped
-WAVE_O = 51  # the oleic term of the wave-speed bound: df_o/dS_o (PV units)
-SPEED_X = 52  # the step's speed bound without WAVE_O (``SPEED = max(SPEED_X, WAVE_O)``)
-NPR = 53
+WAVE_R = 51  # the release phase's term of the wave-speed bound: its row sum of |df_k/dS_l| (PV units)
+SPEED_X = 52  # the step's speed bound without the release phase's Jacobian column (``SPEED >= max(SPEED_X, WAVE_R)``)
+REL = 53  # the release phase (0 aqueous, 1 oleic, 2 microemulsion): the present phase with the largest dlambda/dS
+NPR = 54
 
 # error codes returned by the kernel
 OK = 0

@@ -17,9 +17,10 @@ second order in space and time; at extrema it falls back to upwind. As ``0 <= ps
 scheme is TVD for Courant numbers up to 1/2 whatever ``nu`` in [0, 1] the factor uses, which the time step
 guarantees (``cfl <= 0.5``). The first interior face and the producer face are first order.
 
-Implicit release of oil (``implicit_release_fluxes``; the kernel's budgeted mode past its share of the step budget):
-the outflow faces of cells whose oleic Courant number exceeds the limit take the linearised backward-Euler upwind
-oleic fraction, swept from the inlet, so the step need not resolve a fast oleic wave that carries almost no oil.
+Implicit release (``implicit_release_fluxes``; the kernel's budgeted mode past its share of the step budget): the
+outflow faces of cells whose release-phase Courant number exceeds the limit take the linearised backward-Euler
+upwind fraction of that phase, swept from the inlet, so the step need not resolve a fast wave of a phase a hair
+above its residual (oil, or the aqueous or microemulsion phase) that carries almost none of it.
 
 Dispersion (``solve_dispersion``; Eq. 1.9 per phase, summed over phases for each carried species): backward
 Euler in the species' carrier concentration (a tridiagonal M-matrix, unconditionally stable and positivity
@@ -91,44 +92,61 @@ def upwind_cell_fluxes(pr, i, out, j):
 
 @njit(cache=True, error_model="numpy")
 def implicit_release_fluxes(pr, n, lam, cfl, out):
-    """Replace the outflow face fluxes of every cell whose oleic Courant number ``lam * WAVE_O`` exceeds ``cfl``
-    with the linearised backward-Euler upwind ones (the stiff release of oil near a residual, docs/forward_model.md).
+    """Replace the outflow face fluxes of every cell whose release-phase Courant number ``lam * WAVE_R`` exceeds
+    ``cfl`` with the linearised backward-Euler upwind ones (the stiff release of a phase near its residual,
+    docs/forward_model.md). The release phase ``l = REL`` of a cell is the one with the largest mobility derivative
+    (``cell_properties``): the oleic phase near its residual oil saturation, or the aqueous or microemulsion phase
+    near theirs.
 
     The total velocity is positive, so implicit upwind transport solves cell by cell from the inlet. Linearising the
-    oleic fractional flow of cell ``i`` about the step start, ``f(S) ~ f^n + c (S - S^n)`` with ``c = df_o/dS_o``,
-    the backward-Euler update ``S - S^n = -lam (f(S) - F_in)`` gives the outflow
+    phase-``l`` fractional flow of cell ``i`` about the step start, ``f(S) ~ f^n + c (S - S^n)`` with
+    ``c = df_l/dS_l``, the backward-Euler update ``S - S^n = -lam (f(S) - F_in)`` gives the outflow
 
         F = (f^n + lam c F_in) / (1 + lam c),
 
-    a weighted mean of the cell's explicit oleic fraction and the oleic fraction entering it (``F_in``: 0 at the
-    injector, the released fraction of a released upstream cell, else the upstream cell's own, its face then first
-    order). The other phases keep their ratios, scaled to a total of 1; the components go with the cell's phase
-    compositions, so the update stays conservative. Returns ``(cells released, carrier fraction at the producer
-    face or -1 if the last cell was not released)``."""
+    a weighted mean of the cell's explicit phase-``l`` fraction and the phase-``l`` fraction entering it
+    (``F_in``: the released fraction of a released upstream cell, else the upstream cell's own, its face then first
+    order; at the injector, which brings no oil, 0 for the oleic phase and the cell's share of the non-oleic flow
+    ``f_l / (1 - f_o)`` for the other two). The other phases keep their ratios, scaled to a total of ``1 - F`` (the
+    linearised change of the other fractional flows along ``S_l``: ``df_k/dS_l = -f_k / (1 - f_l) df_l/dS_l``);
+    the components go with the cell's phase compositions, so the update stays conservative. Returns ``(cells
+    released, of which in the aqueous or microemulsion phase, carrier fraction at the producer face or -1 if the
+    last cell was not released)``."""
     count = 0
-    f_up = -1.0  # released oleic fraction of the upstream cell (-1: not released)
+    count_non_oleic = 0
+    released_up = False  # whether the upstream cell was released (its face fractions then ``f_up``)
+    f_up0 = 0.0
+    f_up1 = 0.0
+    f_up2 = 0.0
     fc_out = -1.0
     for i in range(n):
-        c = pr[L.WAVE_O, i]
-        if not (lam * c > cfl and pr[L.F1 + 1, i] < 1.0):
-            f_up = -1.0
+        c = pr[L.WAVE_R, i]
+        l = int(pr[L.REL, i])
+        f_l = pr[L.F1 + l, i]
+        if not (lam * c > cfl and f_l < 1.0):
+            released_up = False
             continue
         count += 1
+        if l != 1:
+            count_non_oleic += 1
         if i == 0:
-            f_in = 0.0
-        elif f_up >= 0.0:
-            f_in = f_up
+            f_o = pr[L.F1 + 1, i]
+            f_in = 0.0 if l == 1 or f_o >= 1.0 else f_l / (1.0 - f_o)
+        elif released_up:
+            f_in = f_up0 if l == 0 else (f_up1 if l == 1 else f_up2)
         else:
             upwind_cell_fluxes(pr, i - 1, out, i)
-            f_in = pr[L.F1 + 1, i - 1]
-        f_o = pr[L.F1 + 1, i]
-        f_new = (f_o + lam * c * f_in) / (1.0 + lam * c)
-        scale = (1.0 - f_new) / (1.0 - f_o)
-        fc = phase_fraction_fluxes(pr, i, pr[L.F1, i] * scale, f_new, pr[L.F1 + 2, i] * scale, out, i + 1)
+            f_in = pr[L.F1 + l, i - 1]
+        f_new = (f_l + lam * c * f_in) / (1.0 + lam * c)
+        scale = (1.0 - f_new) / (1.0 - f_l)
+        f_up0 = f_new if l == 0 else pr[L.F1, i] * scale
+        f_up1 = f_new if l == 1 else pr[L.F1 + 1, i] * scale
+        f_up2 = f_new if l == 2 else pr[L.F1 + 2, i] * scale
+        fc = phase_fraction_fluxes(pr, i, f_up0, f_up1, f_up2, out, i + 1)
         if i == n - 1:
             fc_out = fc
-        f_up = f_new
-    return count, fc_out
+        released_up = True
+    return count, count_non_oleic, fc_out
 
 
 @njit(cache=True, error_model="numpy")
