@@ -110,7 +110,7 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
         be shorter, so capillarity never costs more than half the default step budget). Against a time-converged
         reference the implicit and adaptive modes are less accurate than the explicit flux on strongly capillary
         BCF runs (docs/forward_model.md, "Capillary time step"); the budgeted mode is the explicit flux there. Only
-        the budgeted mode acts with Pc off (its oil release); 2-D runs (no capillary flux, no step budget) accept
+        the budgeted mode acts with Pc off (its release); 2-D runs (no capillary flux, no step budget) accept
         ``"budgeted"`` and ``"explicit"``.
 
     Returns
@@ -128,8 +128,8 @@ def simulate(schedule, params=None, *, cells=100, effects=None, scheme="tvd", pv
     first implicit capillary step; NaN if it took none), ``capillary_switch`` (why and where, or why not),
     ``n_oil_release_implicit`` (cell-steps of the budgeted mode's implicit release of oil),
     ``n_non_oleic_release_implicit`` (of the aqueous or microemulsion phase near its residual) and
-    ``oil_release_implicit_from_pv`` (the PV of the first release of either kind; NaN if none) (and ``slug_rate_ml_min``, the rate of every slug, when a slug
-    sets its own).
+    ``oil_release_implicit_from_pv`` (the PV of the first release of either kind; NaN if none) (and
+    ``slug_rate_ml_min``, the rate of every slug, when a slug sets its own).
 
     Adsorption in PV units: for a step injection of concentration ``C_J`` the Langmuir retardation is
     ``D = C^(C_J) / C_J = a / (1 + b C_J)`` pore volumes with ``a = AD41 + AD42 C_SEP`` and ``b = B4D`` for polymer

@@ -18,10 +18,11 @@ wall-time budget exhausted, ``budgets``) does not abort the stage: its rows are 
 ran). The stage warns with the count; stages consuming the responses drop failed samples and say how many.
 
 Step control: the default ``capillary = "budgeted"`` is simulate's (the explicit scheme in every run inside half its
-step budget; past it, the implicit capillary step and the implicit release of oil where the explicit limits would
-exceed the budget); the optional variables ``capillary_implicit_from_pv`` and ``oil_release_implicit_from_pv``
-(dims ``sample``, ``experiment``) hold the PV of a run's first implicit capillary step and first implicit release
-(NaN where it took none, and for failed samples), so a run that left the explicit scheme is visible in the output.
+step budget; past it, the implicit capillary step and the implicit release of a phase near its residual where the
+explicit limits would exceed the budget); the optional variables ``capillary_implicit_from_pv`` and
+``oil_release_implicit_from_pv`` (dims ``sample``, ``experiment``) hold the PV of a run's first implicit capillary
+step and first implicit release (NaN where it took none, and for failed samples), so a run that left the explicit
+scheme is visible in the output.
 """
 
 from __future__ import annotations
@@ -77,7 +78,7 @@ RESPONSES = DatasetSchema(
                                               doc="simulate's attr of that name: NaN where the run kept the "
                                                   "explicit capillary flux (or failed)"),
        "oil_release_implicit_from_pv": Variable(("sample", "experiment"), units="1", required=False, allow_nan=True,
-                                                long_name="injected PV of the run's first implicit release of oil",
+                                                long_name="injected PV of the run's first implicit release",
                                                 doc="simulate's attr of that name: NaN where the run took none (or "
                                                     "failed)")},
     doc="simulated coreflood responses",

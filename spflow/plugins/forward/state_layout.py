@@ -56,4 +56,4 @@ ERR_WALL = 5
 CAP_EXPLICIT = 0  # forward Euler with the diffusion limit dx^2 / (2 D_cap) on every step
 CAP_IMPLICIT = 1  # the linearly implicit step on every step, at the advective step (saturation-change control)
 CAP_ADAPTIVE = 2  # explicit while its diffusion limit is affordable, the implicit step where it is not
-CAP_BUDGETED = 3  # explicit until a share of the step budget is used, then the budget step (adaptive Pc, oil release)
+CAP_BUDGETED = 3  # explicit until a share of the step budget is used, then the budget step (adaptive Pc, release)
