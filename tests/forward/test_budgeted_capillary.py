@@ -267,6 +267,55 @@ def test_the_release_sweep_of_an_aqueous_or_microemulsion_phase():
     assert np.all(out[:, 0] == 7.0)
 
 
+def fractional_flow_jacobian(sat, coef, expo, h=1e-30):
+    """Complex-step derivatives (exact to round-off) of ``f_k = lambda_k / sum(lambda)`` in each saturation (held
+    independent, as the wave-speed bound does), Corey mobilities ``lambda_l = coef_l S_l^n_l``."""
+    jac = np.zeros((3, 3))
+    for j in range(3):
+        if sat[j] == 0.0:
+            continue
+        s = sat.astype(complex)
+        s[j] += 1j * h
+        lam = coef * s**expo
+        jac[:, j] = (lam / lam.sum()).imag / h
+    return jac
+
+
+@pytest.mark.parametrize("sat, coef, fast", [((1e-3, 0.3, 0.699), (1000.0, 80.0, 10.0), 0),
+                                             ((0.6, 2e-4, 0.3998), (10.0, 1e5, 10.0), 1),
+                                             ((0.2, 0.3, 0.5), (1.0, 2.0, 300.0), 2)])
+def test_the_release_phase_and_the_bound_without_its_column(sat, coef, fast):
+    """``cell_properties.release_terms`` on three-phase states whose fast phase (largest analytic ``dlambda/dS``)
+    is the aqueous phase a hair above zero mobility, then the oleic one, then the microemulsion: that phase, its
+    term the given row sum, and the remaining bound the largest row sum of |df_k/dS_j| less its entry in that
+    column -- the Jacobian by complex-step differentiation of ``f = lambda / sum(lambda)``."""
+    from spflow.plugins.forward.cell_properties import release_terms
+
+    sat = np.array(sat)
+    coef = np.array(coef)
+    expo = np.array([1.2, 1.05, 3.0])
+    lam = coef * sat**expo
+    dl = expo * coef * sat**(expo - 1.0)
+    f = lam / lam.sum()
+    jac = fractional_flow_jacobian(sat, coef, expo)
+    rows = np.abs(jac).sum(axis=1)
+    rel, wave_r, speed_x = release_terms(*sat, *dl, lam.sum(), *f, *rows)
+    expected = int(np.argmax(dl))
+    assert rel == expected == fast
+    assert wave_r == rows[expected]
+    assert speed_x == pytest.approx(np.max(rows - np.abs(jac[:, expected])), rel=1e-9)
+
+
+def test_a_two_phase_release_leaves_only_the_phase_velocities():
+    """Two phases present: the release phase is the present one with the larger ``dlambda/dS`` (an absent phase's
+    derivative, however large, does not count) and no derivative term remains (the other phase's is the same
+    derivative on ``S_k + S_l = 1``)."""
+    from spflow.plugins.forward.cell_properties import release_terms
+
+    rel, wave_r, speed_x = release_terms(0.5, 0.0, 0.5, 2.0, 9.0, 3.0, 4.0, 0.4, 0.0, 0.6, 7.0, 0.0, 7.0)
+    assert (rel, wave_r, speed_x) == (2, 7.0, 0.0)
+
+
 def test_a_run_past_half_its_budget_releases_oil_implicitly_and_finishes():
     """BCF1 on 30 cells with a budget of 500 steps (the explicit scheme needs about 600): the explicit mode stops
     with the budget error; the budgeted mode, past half its budget, takes the waves above the budget step's speed

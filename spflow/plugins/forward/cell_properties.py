@@ -340,6 +340,34 @@ def species_dispersion(pr, i, k0, k1, k2):
 
 
 @njit(cache=True, error_model="numpy")
+def release_terms(sat0, sat1, sat2, dl0, dl1, dl2, lam_t, f0, f1, f2, wave_a, wave_o, wave_m):
+    """The release phase of a cell (``transport.implicit_release_fluxes``), its term of the wave-speed bound and the
+    bound's derivative terms without its column: ``(l, wave_l, speed_x)``.
+
+    ``l`` is the present phase (``sat_l > 0``) with the largest mobility derivative ``dl_l = dlambda_l/dS_l``; its
+    column of the fractional-flow Jacobian, ``df_k/dS_l = (delta_kl - f_k) dl_l / lam_t``, dominates the bound
+    whose phase terms ``wave_k`` are the row sums of ``|df_k/dS_j|``. With two phases the other phase's term is the
+    same derivative (``df_k/dS_k = df_l/dS_l`` on ``S_k + S_l = 1``), which the release takes: ``speed_x = 0``;
+    with three, ``speed_x`` is the largest row sum less its entry in column ``l``."""
+    rel = 0
+    dl_rel = dl0 if sat0 > 0.0 else -1.0
+    if sat1 > 0.0 and dl1 > dl_rel:
+        rel = 1
+        dl_rel = dl1
+    if sat2 > 0.0 and dl2 > dl_rel:
+        rel = 2
+        dl_rel = dl2
+    wave_r = wave_a if rel == 0 else (wave_o if rel == 1 else wave_m)
+    speed_x = 0.0
+    if sat0 > 0.0 and sat1 > 0.0 and sat2 > 0.0:
+        col = dl_rel / lam_t
+        speed_x = max(wave_a - ((1.0 - f0) if rel == 0 else f0) * col,
+                      wave_o - ((1.0 - f1) if rel == 1 else f1) * col,
+                      wave_m - ((1.0 - f2) if rel == 2 else f2) * col, 0.0)
+    return rel, wave_r, speed_x
+
+
+@njit(cache=True, error_model="numpy")
 def _mobilities(st, pr, prm, n):
     """Pass 3 (steps 5 and 7): polymer and phase viscosities, mobilities, fractional flows, the wave-speed bound,
     phase velocities, dispersion coefficients and the capillary pressure; updates the lagged FPC and GRADK.
@@ -423,28 +451,11 @@ def _mobilities(st, pr, prm, n):
         pr[L.V1 + 2, i] = v2
         v_bound = max(max(v0, v2) / e_min, v1)
         speed = max(speed, v_bound)
-        # the release phase (``transport.implicit_release_fluxes``): the present phase with the largest mobility
-        # derivative, whose column of the fractional-flow Jacobian (d f_k / d S_l = (delta_kl - f_k) dl_l / lam_t)
-        # dominates the bound; its term, and the bound without its column: with two phases, the other phase's
-        # term is the same derivative (df_k/dS_k = df_l/dS_l), so only the phase velocities remain; with three,
-        # every term less its entry in that column
-        rel = 0
-        dl_rel = dl0 if sat0 > 0.0 else -1.0
-        if sat1 > 0.0 and dl1 > dl_rel:
-            rel = 1
-            dl_rel = dl1
-        if sat2 > 0.0 and dl2 > dl_rel:
-            rel = 2
-            dl_rel = dl2
+        # the release phase and its term (``transport.implicit_release_fluxes``), and the bound without its column
+        rel, wave_r, speed_x = release_terms(sat0, sat1, sat2, dl0, dl1, dl2, lam_t, f0, f1, f2, wave_a, wave_o, wave_m)
         pr[L.REL, i] = rel
-        pr[L.WAVE_R, i] = wave_a if rel == 0 else (wave_o if rel == 1 else wave_m)
-        if sat0 > 0.0 and sat1 > 0.0 and sat2 > 0.0:
-            col = dl_rel / lam_t
-            pr[L.SPEED_X, i] = max(wave_a - ((1.0 - f0) if rel == 0 else f0) * col,
-                                   wave_o - ((1.0 - f1) if rel == 1 else f1) * col,
-                                   wave_m - ((1.0 - f2) if rel == 2 else f2) * col, v_bound)
-        else:
-            pr[L.SPEED_X, i] = v_bound
+        pr[L.WAVE_R, i] = wave_r
+        pr[L.SPEED_X, i] = max(speed_x, v_bound)
 
         # dispersion coefficients (PV units): phi S_l K_l / (u L) = alpha_l f_l / L + phi S_l D / (u L)
         k0 = prm[K.ALPHA_D] * f0 + dm * sat0
