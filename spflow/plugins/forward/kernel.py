@@ -498,9 +498,7 @@ def run_kernel(prm, end_pv, inj, flow, out_pv, prof_pv, n, tvd, cfl, max_steps, 
             lam = dt / dx
             T.advective_fluxes(pr, n, tvd, lam, prm[K.EPHI3], prm[K.EPHI4], inj[0, slug], inj[1, slug],
                                inj[2, slug], inj[3, slug], flux)
-            n_release = 0
-            n_release_non_oleic = 0
-            if budget_step > 0.0:
+            if budget_step > 0.0:  # (budget_step does not change across halvings: the counts are this try's)
                 n_release, n_release_non_oleic, fc_out = T.implicit_release_fluxes(pr, n, lam, cfl, flux)
             if capillary and not implicit_step:
                 T.capillary_fluxes(pr, n, dx, k_over_ul, flux)
