@@ -29,7 +29,7 @@ from scipy.stats import qmc
 from spflow.plugins.surrogates.basis import design_matrix, multi_indices
 from spflow.plugins.surrogates.degree_adaptive import fit_pce
 from spflow.plugins.surrogates.lars import RANKINGS, hybrid_lars
-from spflow.plugins.surrogates.pce_cross_validation import fold_indices
+from spflow.plugins.surrogates.folds import fold_indices
 
 from analytic_functions import PROBLEMS
 from bench_surrogates_peers import N_VALIDATION, VALIDATION_SEED
