@@ -231,16 +231,18 @@ def test_cross_validated_ranking_is_the_textbook_ten_fold_choice_per_output():
 
 
 @pytest.mark.filterwarnings("ignore::spflow.core.errors.DegreeCapWarning")
-def test_fit_pce_applies_the_selection_options_to_the_basis_the_default_search_selects():
-    """The degree and q search is the default's; the one-SE rule and the cross-validated ranking replace only the
-    model on the selected basis."""
-    z = np.random.default_rng(7).uniform(-1, 1, (80, 3))
+@pytest.mark.parametrize("ranking, prefix_rule", [("cv", "one_se"), ("lasso", "one_se"), ("cv", "min_loo")])
+def test_fit_pce_applies_the_selection_options_to_the_basis_the_default_search_selects(ranking, prefix_rule):
+    """The degree and q search is the default's (a basis scored by the smallest corrected LOO along the LASSO path);
+    the one-SE rule and the cross-validated ranking replace only the model on the selected basis."""
+    z = np.random.default_rng(3).uniform(-1, 1, (80, 3))
     y = np.abs(z[:, 0]) + np.exp(z[:, 1]) * z[:, 2]
     default = fit_pce(z, y, solver="lars", degree_max=6)
-    chosen = fit_pce(z, y, solver="lars", degree_max=6, ranking="cv", prefix_rule="one_se")
+    chosen = fit_pce(z, y, solver="lars", degree_max=6, ranking=ranking, prefix_rule=prefix_rule)
+    assert not np.allclose(chosen.coefficients, default.coefficients)  # the options change the model here
     assert (chosen.degree, chosen.q, chosen.history) == (default.degree, default.q, default.history)
     np.testing.assert_array_equal(chosen.indices, default.indices)
-    on_basis = hybrid_lars(design_matrix(z, default.indices), y, ranking="cv", prefix_rule="one_se")
+    on_basis = hybrid_lars(design_matrix(z, default.indices), y, ranking=ranking, prefix_rule=prefix_rule)
     np.testing.assert_allclose(chosen.coefficients[0], on_basis.coefficients, rtol=1e-12, atol=1e-14)
     assert chosen.rankings == (on_basis.ranking,) and default.rankings == ("lasso",)
     np.testing.assert_allclose(chosen.modified_loo[0], on_basis.modified_loo)

@@ -95,7 +95,9 @@ class PCEFit:
 
     @property
     def modified_loo_mean(self) -> float:
-        """The selection score: mean corrected (modified) LOO over outputs."""
+        """Mean corrected (modified) LOO of the selected models over outputs: the selection score, except with
+        ``prefix_rule="one_se"`` or ``ranking="cv"``, whose models are not the minimum of the path (the score of their
+        basis is in ``history``)."""
         return float(np.mean(self.modified_loo))
 
     @property
@@ -106,16 +108,18 @@ class PCEFit:
 
 def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, ranking: str, prefix_rule: str,
                parallel) -> tuple[np.ndarray, ...]:
-    """(coefficients (m, P), loo, modified_loo, empirical, rankings) of one basis (rankings: the ranking each output's
-    LARS model comes from; empty for OLS)."""
+    """(coefficients (m, P), loo, modified_loo, empirical, score, rankings) of one basis. ``score`` (m,) is what the
+    degree search compares: the smallest corrected LOO along each output's LARS path (the selected model's for the
+    default prefix rule) or the OLS fit's; ``rankings`` the ranking each output's LARS model comes from (empty for
+    OLS)."""
     from .lars import hybrid_lars_outputs  # scikit-learn loads when a PCE is fitted
 
     if solver == "ols":
         if psi.shape[0] <= psi.shape[1]:
             inf = np.full(y.shape[1], np.inf)
-            return np.zeros((y.shape[1], psi.shape[1])), inf, inf, inf, ()
+            return np.zeros((y.shape[1], psi.shape[1])), inf, inf, inf, inf, ()
         fit = ols(psi, y)
-        return fit.coefficients.T, fit.loo, fit.modified_loo, fit.empirical, ()
+        return fit.coefficients.T, fit.loo, fit.modified_loo, fit.empirical, fit.modified_loo, ()
     if parallel is None or y.shape[1] == 1:
         results = hybrid_lars_outputs(psi, y, ranking, prefix_rule)
     else:
@@ -126,7 +130,7 @@ def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, ranking: str, prefix
         results = [r for part in parts for r in part]
     return (np.array([r.coefficients for r in results]), np.array([r.loo for r in results]),
             np.array([r.modified_loo for r in results]), np.array([r.empirical for r in results]),
-            tuple(r.ranking for r in results))
+            np.array([r.path_modified_loo.min() for r in results]), tuple(r.ranking for r in results))
 
 
 def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], solver: str, target_loo,
@@ -181,8 +185,9 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     :data:`.lars.PREFIX_RULES`) how it chooses the nested model along the ranking: the smallest corrected LOO
     (default) or the one-standard-error rule (:mod:`.lars`; docs/surrogates.md, "Where spflow's PCE trails
     OpenTURNS"). The degree and q search always scores a basis by the smallest corrected LOO along a ranking (the
-    LASSO one for "cv"); the one-SE rule and the cross-validated choice of the ranking are applied to the selected
-    basis only (inside the search the one-SE rule stopped Ishigami at N = 50 at degree 1). Both are ignored by OLS.
+    LASSO one for "cv"), whatever model the prefix rule keeps (scored by its one-SE model, the search stopped
+    Ishigami at N = 50 at degree 1); the cross-validated choice of the ranking is made on the selected basis only.
+    Both options are ignored by OLS.
 
     ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers;
     ``progress(degree, degree_max)`` (e.g. from ``ctx.report_progress``) is told each degree tried, and
@@ -217,9 +222,9 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
                 too_big.append(indices.shape[0])
                 continue
             with single_threaded_blas():
-                coef, loo, modified, emp, rankings = _fit_basis(design_matrix(z, indices, families), y, solver,
-                                                                search_ranking, "min_loo", parallel)
-            score = float(np.mean(modified))
+                coef, loo, modified, emp, scores, rankings = _fit_basis(design_matrix(z, indices, families), y,
+                                                                        solver, search_ranking, prefix_rule, parallel)
+            score = float(np.mean(scores))
             history.append((degree, qv, indices.shape[0], score))
             q_scores.append(score)
             degree_best = min(degree_best, score)
@@ -243,10 +248,10 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     if progress is not None:  # done, whether at degree_max or stopped early
         progress(degree_max, degree_max)
     indices, coef, degree, qv, loo, modified, emp, rankings = best
-    if solver == "lars" and (ranking, prefix_rule) != (search_ranking, "min_loo"):
+    if solver == "lars" and ranking == "cv":
         with single_threaded_blas():
-            coef, loo, modified, emp, rankings = _fit_basis(design_matrix(z, indices, families), y, solver, ranking,
-                                                            prefix_rule, parallel)
+            coef, loo, modified, emp, _, rankings = _fit_basis(design_matrix(z, indices, families), y, solver,
+                                                               ranking, prefix_rule, parallel)
     message = ""
     if not stopped and degree == cap:
         reason = (f"degree_max = {degree_max}" if cap == degree_max else
