@@ -15,9 +15,9 @@ must carry them. On issue #24's benchmark (``benchmarks/bench_surrogates_peers.p
 designs) the LASSO ranking gave ε_val 1.6e-4 / 7.1e-8 / 1.7e-11 at N = 50 / 100 / 200 against 3.5e-2 / 3.7e-5 / 7.2e-9
 for plain LAR (OpenTURNS' LARS: 0.62 / 4.7e-5 / 2.1e-11); on Borehole, the G-function and the BCF1 simulator it was
 as good or better within 20 % (docs/surrogates.md, Benchmark against peers). Plain LAR stays available
-(``ranking="lar"``): it is the better ranking on the G-function at N = 200-400, and neither the corrected LOO nor a
-K-fold cross-validation of this step tells the two apart there (docs/surrogates.md, "Where spflow's PCE trails
-OpenTURNS").
+(``ranking="lar"``): it is the better ranking on the G-function at N = 200-400, where the corrected LOO cannot tell
+the two apart; a K-fold cross-validation of this step with the one-SE rule can (``ranking="cv"``, below), at 2.5-10
+times the fit's CPU (docs/surrogates.md, "Where spflow's PCE trails OpenTURNS").
 
 All refits come from one QR factorisation of the regressors in LARS order: with Ψ_k = Q_k R_k, the hat diagonal is
 h_k = Σ_{j<=k} Q_j², the fitted values are Σ_{j<=k} Q_j (Q_jᵀ y) and tr((Ψ_kᵀΨ_k)⁻¹) = ||R_k⁻¹||²_F, all cumulative
