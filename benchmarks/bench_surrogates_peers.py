@@ -31,10 +31,11 @@ Columns (medians over the output columns of a fit, then over the seeds):
   columns whose validation outputs are constant up to round-off are not scored;
 * ``LOO/eps``: the method's own leave-one-out estimate divided by ``eps_val``. spflow PCE: the error the model
   reports for a calibration (``PCE.error_variance / output_variance``: the corrected LOO; ``spflow_cv``, the same fit
-  with ``cv_folds=10``: the 10-fold cross-validation error of the whole adaptive fit); spflow GP/PCK: their Kriging
-  (Dubrule) LOO; OpenTURNS: the corrected LOO of the selected basis (the smallest entry of ``getErrorHistory``);
-  chaospy: the plain LOO of the OLS fit from its hat matrix (chaospy has no error estimate; computed here); scikit-learn: the
-  closed-form LOO of the fitted GP (computed here);
+  with ``cv_folds=10``: the 10-fold cross-validation error of the whole adaptive fit; ``spflow_one_se``, the same fit
+  with ``prefix_rule="one_se"``, and ``spflow_one_se_cv``, with ``ranking="cv", prefix_rule="one_se"``: the corrected
+  LOO of the model they keep); spflow GP/PCK: their Kriging (Dubrule) LOO; OpenTURNS: the corrected LOO of the
+  selected basis (the smallest entry of ``getErrorHistory``); chaospy: the plain LOO of the OLS fit from its hat matrix
+  (chaospy has no error estimate; computed here); scikit-learn: the closed-form LOO of the fitted GP (computed here);
 * ``fit CPU``: process CPU time of the fit of all columns, seconds (the peers' own threads included);
 * ``p``: the median selected (spflow) or fixed (peers) total degree of a PCE ("-" for Kriging).
 
@@ -217,7 +218,9 @@ def fit_sklearn_gp(kernel: str):
     return fit
 
 
-METHODS = {"spflow": fit_spflow(), "spflow_cv": fit_spflow(cv_folds=10), "openturns": fit_openturns,
+METHODS = {"spflow": fit_spflow(), "spflow_cv": fit_spflow(cv_folds=10),
+           "spflow_one_se": fit_spflow(prefix_rule="one_se"),
+           "spflow_one_se_cv": fit_spflow(ranking="cv", prefix_rule="one_se"), "openturns": fit_openturns,
            "chaospy": fit_chaospy,
            "spflow_gp": fit_spflow_kriging(GP), "spflow_gp_matern": fit_spflow_kriging(GP, kernel="matern52"),
            "spflow_pck": fit_spflow_kriging(PCK), "sklearn_gp_rbf": fit_sklearn_gp("rbf"),
@@ -240,6 +243,7 @@ def main() -> None:
                         help="comma-separated subset of " + ", ".join([*PROBLEMS, "simulator"]))
     parser.add_argument("--sizes", default=None, help="comma-separated training sizes (default 50,100,200,400)")
     parser.add_argument("--seeds", type=int, default=None, help="seeds per N (default 5, --quick 2)")
+    parser.add_argument("--first-seed", type=int, default=0, help="seeds first-seed, first-seed + 1, ... (fresh designs)")
     parser.add_argument("--simulator-seeds", type=int, default=5, help="at most this many seeds per N on the simulator")
     parser.add_argument("--cache", type=Path, default=Path("/tmp/spflow_bench_peers"),
                         help="directory of the simulator's cached runs (.npz, one per design)")
@@ -263,7 +267,7 @@ def main() -> None:
         for n in sizes:
             for method in methods:
                 rows = []
-                for seed in range(n_seeds):
+                for seed in range(args.first_seed, args.first_seed + n_seeds):
                     x = lower + (upper - lower) * qmc.LatinHypercube(d=d, seed=seed).random(n)
                     prediction, loo, cpu, degree = METHODS[method](x, func(x), lower, upper, xv)
                     eps = relative_errors(prediction, yv)

@@ -9,7 +9,7 @@ For each design (the Latin hypercubes and the 10^4 validation points of ``bench_
   the ranking a K-fold cross-validation of the LARS step picks (the smaller CV error);
 * error estimates of the default (LASSO) model, over its ε_val: the corrected LOO it reports; the K-fold
   cross-validation of the LARS step on the fixed basis (ranking, prefix choice and OLS refit redone on K − 1 folds,
-  folds of :func:`~spflow.plugins.surrogates.pce_cross_validation.fold_indices`); and that CV with Burman's
+  folds of :func:`~spflow.plugins.surrogates.folds.fold_indices`); and that CV with Burman's
   correction for the smaller training sets ("corrected v-fold cross-validation", Burman 1989, Biometrika 76:503),
   CV + ε_emp(all N) − (1/K) Σ_k ε_N(fit_k), where ε_N(fit_k) is fold k's model's error on all N points.
 
@@ -29,7 +29,7 @@ from scipy.stats import qmc
 from spflow.plugins.surrogates.basis import design_matrix, multi_indices
 from spflow.plugins.surrogates.degree_adaptive import fit_pce
 from spflow.plugins.surrogates.lars import RANKINGS, hybrid_lars
-from spflow.plugins.surrogates.pce_cross_validation import fold_indices
+from spflow.plugins.surrogates.folds import fold_indices
 
 from analytic_functions import PROBLEMS
 from bench_surrogates_peers import N_VALIDATION, VALIDATION_SEED

@@ -8,7 +8,8 @@ from numpy.polynomial import legendre
 
 from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.outputs import OutputIndex
-from spflow.plugins.surrogates.pce_cross_validation import FOLD_SEED, kfold_error
+from spflow.plugins.surrogates.folds import FOLD_SEED
+from spflow.plugins.surrogates.pce_cross_validation import kfold_error
 from spflow.plugins.surrogates.pce_model import PCE
 from spflow.plugins.surrogates.pce_stage import PCEStage
 from spflow.surrogates import PCE as PCERegressor

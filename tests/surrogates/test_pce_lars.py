@@ -7,6 +7,7 @@ import pytest
 from spflow.core.errors import ParameterError
 from spflow.plugins.surrogates.basis import design_matrix, multi_indices
 from spflow.plugins.surrogates.degree_adaptive import fit_pce
+from spflow.plugins.surrogates.folds import FOLD_SEED
 from spflow.plugins.surrogates.lars import hybrid_lars, hybrid_lars_outputs
 from spflow.plugins.surrogates.regression import ols
 
@@ -151,3 +152,107 @@ def test_unknown_ranking_is_refused():
         hybrid_lars_outputs(psi, psi[:, 1:3], ranking="omp")
     with pytest.raises(ParameterError, match="fit_pce: ranking must be one of"):
         fit_pce(np.zeros((10, 2)), np.arange(10.0), solver="lars", ranking="LASSO")
+
+
+def _kinked_problem(seed):
+    """60 points in 3-D, the full degree-4 basis (35 terms), a kinked response with noise: the LARS path runs to its
+    end and its nested models are scored from a constant to 35 terms."""
+    z = np.random.default_rng(seed).uniform(-1, 1, (60, 3))
+    psi = design_matrix(z, multi_indices(3, 4, 1.0))
+    y = np.abs(z[:, 0]) + np.exp(z[:, 1]) * z[:, 2] + 0.05 * np.random.default_rng(100 + seed).normal(size=60)
+    return psi, y
+
+
+@pytest.mark.parametrize("seed", [1, 5, 9])
+def test_one_standard_error_rule_by_hand_along_the_least_angle_ranking(seed):
+    """The one-SE rule recomputed from its definition (Hastie, Tibshirani & Friedman 2009, §7.10): every nested model
+    of the plain-LAR order (the order written out in ``_lar_entry_order``) refitted by OLS, its LOO residuals by
+    N explicit refits without each point, T(P, N) from (ΨᵀΨ)⁻¹; the smallest model whose corrected LOO is within one
+    standard error (T times sd(e²)/√N of the minimising model's N squared LOO residuals) of the minimum."""
+    psi, y = _kinked_problem(seed)
+    n = y.size
+    x = psi[:, 1:] - psi[:, 1:].mean(axis=0)
+    x /= np.linalg.norm(x, axis=0)
+    order = [0, *(1 + np.array(_lar_entry_order(x, y - y.mean(), x.shape[1])))]
+    scores, errors = [], []
+    for k in range(1, len(order) + 1):
+        a = psi[:, order[:k]]
+        loo = np.array([y[i] - a[i] @ np.linalg.lstsq(np.delete(a, i, 0), np.delete(y, i), rcond=None)[0]
+                        for i in range(n)])
+        squared = loo**2 / y.var()
+        t = n / (n - k) * (1.0 + np.trace(np.linalg.inv(a.T @ a)))
+        scores.append(t * squared.mean())
+        errors.append(t * squared.std(ddof=1) / np.sqrt(n))
+    best = int(np.argmin(scores))
+    one_se = int(np.flatnonzero(np.array(scores) <= scores[best] + errors[best])[0])
+    assert one_se < best  # on these designs the rule keeps fewer terms than the minimum
+    result = hybrid_lars(psi, y, ranking="lar", prefix_rule="one_se")
+    np.testing.assert_array_equal(result.active, order[: one_se + 1])
+    np.testing.assert_allclose(result.modified_loo, scores[one_se], rtol=1e-8)
+    refit = np.linalg.lstsq(psi[:, order[: one_se + 1]], y, rcond=None)[0]
+    np.testing.assert_allclose(result.coefficients[result.active], refit, rtol=1e-8, atol=1e-12)
+    assert hybrid_lars(psi, y, ranking="lar").active.size == best + 1  # the default rule: the minimum
+
+
+def _ten_fold_error(psi, y, ranking):
+    """Textbook 10-fold cross-validation of the LARS step with the one-SE rule: the documented folds (a permutation
+    from default_rng(FOLD_SEED) cut into 10 near-equal consecutive parts), a fit on the other nine, the held-out
+    squared errors summed."""
+    order = np.random.default_rng(FOLD_SEED).permutation(y.size)
+    total = 0.0
+    for held in np.array_split(order, 10):
+        train = np.setdiff1d(np.arange(y.size), held)
+        model = hybrid_lars(psi[train], y[train], ranking=ranking, prefix_rule="one_se")
+        total += np.sum((psi[held] @ model.coefficients - y[held]) ** 2)
+    return total
+
+
+def test_cross_validated_ranking_is_the_textbook_ten_fold_choice_per_output():
+    """ranking="cv" keeps, per output, the ranking with the smaller 10-fold error of the whole LARS step; the designs
+    are ones where the two choices differ (LAR on seeds 1 and 9, LASSO on seeds 0 and 4) and give different models."""
+    chosen_seen = set()
+    for seed in (0, 1, 4, 9):
+        psi, y = _kinked_problem(seed)
+        errors = {r: _ten_fold_error(psi, y, r) for r in ("lasso", "lar")}
+        chosen = min(errors, key=errors.get)
+        chosen_seen.add(chosen)
+        result = hybrid_lars(psi, y, ranking="cv", prefix_rule="one_se")
+        assert result.ranking == chosen
+        reference = hybrid_lars(psi, y, ranking=chosen, prefix_rule="one_se")
+        np.testing.assert_array_equal(result.active, reference.active)
+        np.testing.assert_allclose(result.coefficients, reference.coefficients, rtol=1e-12, atol=1e-14)
+    assert chosen_seen == {"lasso", "lar"}
+    # vector outputs on one design: one choice per column
+    psi, y1 = _kinked_problem(1)
+    y2 = np.sin(3.0 * psi[:, 1]) + psi[:, 2] * psi[:, 3]
+    expected = [min(("lasso", "lar"), key=lambda r: _ten_fold_error(psi, y, r)) for y in (y1, y2)]
+    results = hybrid_lars_outputs(psi, np.column_stack([y1, y2]), ranking="cv", prefix_rule="one_se")
+    assert [r.ranking for r in results] == expected == ["lar", "lasso"]
+
+
+@pytest.mark.filterwarnings("ignore::spflow.core.errors.DegreeCapWarning")
+@pytest.mark.parametrize("ranking, prefix_rule", [("cv", "one_se"), ("lasso", "one_se"), ("cv", "min_loo")])
+def test_fit_pce_applies_the_selection_options_to_the_basis_the_default_search_selects(ranking, prefix_rule):
+    """The degree and q search is the default's (a basis scored by the smallest corrected LOO along the LASSO path);
+    the one-SE rule and the cross-validated ranking replace only the model on the selected basis."""
+    z = np.random.default_rng(3).uniform(-1, 1, (80, 3))
+    y = np.abs(z[:, 0]) + np.exp(z[:, 1]) * z[:, 2]
+    default = fit_pce(z, y, solver="lars", degree_max=6)
+    chosen = fit_pce(z, y, solver="lars", degree_max=6, ranking=ranking, prefix_rule=prefix_rule)
+    assert not np.allclose(chosen.coefficients, default.coefficients)  # the options change the model here
+    assert (chosen.degree, chosen.q, chosen.history) == (default.degree, default.q, default.history)
+    np.testing.assert_array_equal(chosen.indices, default.indices)
+    on_basis = hybrid_lars(design_matrix(z, default.indices), y, ranking=ranking, prefix_rule=prefix_rule)
+    np.testing.assert_allclose(chosen.coefficients[0], on_basis.coefficients, rtol=1e-12, atol=1e-14)
+    assert chosen.rankings == (on_basis.ranking,) and default.rankings == ("lasso",)
+    np.testing.assert_allclose(chosen.modified_loo[0], on_basis.modified_loo)
+
+
+def test_unknown_prefix_rule_is_refused():
+    psi = _basis()
+    with pytest.raises(ParameterError, match="hybrid_lars: prefix_rule must be one of"):
+        hybrid_lars(psi, psi[:, 1], prefix_rule="1se")
+    with pytest.raises(ParameterError, match="fit_pce: prefix_rule must be one of"):
+        fit_pce(np.zeros((10, 2)), np.arange(10.0), solver="lars", prefix_rule="one-se")
+    with pytest.raises(ParameterError, match="ranking 'cv' needs N >= 4"):
+        hybrid_lars(psi[:3], psi[:3, 1], ranking="cv")

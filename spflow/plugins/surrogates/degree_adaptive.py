@@ -71,7 +71,8 @@ class PCEFit:
     outputs' population variance (m,); ``history`` lists (degree, q, n_terms, ε^mean) of every scored basis;
     ``degree_cap`` is the largest degree the search could try (``degree_max`` or the basis-size limit) and
     ``cap_warning`` the message of the :class:`~spflow.core.errors.DegreeCapWarning` ("" when the selected degree is
-    below the cap or the search stopped on its own)."""
+    below the cap or the search stopped on its own); ``rankings`` the LARS ranking of each output's model (with
+    ``ranking="cv"``, the one chosen; empty for OLS)."""
 
     indices: np.ndarray
     coefficients: np.ndarray
@@ -85,6 +86,7 @@ class PCEFit:
     history: list[tuple[int, float, int, float]] = field(default_factory=list)
     degree_cap: int = DEGREE_MAX
     cap_warning: str = ""
+    rankings: tuple[str, ...] = ()
 
     @property
     def loo_mean(self) -> float:
@@ -93,7 +95,9 @@ class PCEFit:
 
     @property
     def modified_loo_mean(self) -> float:
-        """The selection score: mean corrected (modified) LOO over outputs."""
+        """Mean corrected (modified) LOO of the selected models over outputs: the selection score, except with
+        ``prefix_rule="one_se"`` or ``ranking="cv"``, whose models are not the minimum of the path (the score of their
+        basis is in ``history``)."""
         return float(np.mean(self.modified_loo))
 
     @property
@@ -102,26 +106,31 @@ class PCEFit:
         return float(np.mean(self.empirical))
 
 
-def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, ranking: str, parallel) -> tuple[np.ndarray, ...]:
-    """(coefficients (m, P), loo, modified_loo, empirical) of one basis."""
+def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, ranking: str, prefix_rule: str,
+               parallel) -> tuple[np.ndarray, ...]:
+    """(coefficients (m, P), loo, modified_loo, empirical, score, rankings) of one basis. ``score`` (m,) is what the
+    degree search compares: the smallest corrected LOO along each output's LARS path (the selected model's for the
+    default prefix rule) or the OLS fit's; ``rankings`` the ranking each output's LARS model comes from (empty for
+    OLS)."""
     from .lars import hybrid_lars_outputs  # scikit-learn loads when a PCE is fitted
 
     if solver == "ols":
         if psi.shape[0] <= psi.shape[1]:
             inf = np.full(y.shape[1], np.inf)
-            return np.zeros((y.shape[1], psi.shape[1])), inf, inf, inf
+            return np.zeros((y.shape[1], psi.shape[1])), inf, inf, inf, inf, ()
         fit = ols(psi, y)
-        return fit.coefficients.T, fit.loo, fit.modified_loo, fit.empirical
+        return fit.coefficients.T, fit.loo, fit.modified_loo, fit.empirical, fit.modified_loo, ()
     if parallel is None or y.shape[1] == 1:
-        results = hybrid_lars_outputs(psi, y, ranking)
+        results = hybrid_lars_outputs(psi, y, ranking, prefix_rule)
     else:
         from joblib import delayed
 
         chunks = np.array_split(np.arange(y.shape[1]), min(y.shape[1], max(1, parallel.n_jobs)))
-        parts = parallel(delayed(hybrid_lars_outputs)(psi, y[:, c], ranking) for c in chunks)
+        parts = parallel(delayed(hybrid_lars_outputs)(psi, y[:, c], ranking, prefix_rule) for c in chunks)
         results = [r for part in parts for r in part]
     return (np.array([r.coefficients for r in results]), np.array([r.loo for r in results]),
-            np.array([r.modified_loo for r in results]), np.array([r.empirical for r in results]))
+            np.array([r.modified_loo for r in results]), np.array([r.empirical for r in results]),
+            np.array([r.path_modified_loo.min() for r in results]), tuple(r.ranking for r in results))
 
 
 def _check(z: np.ndarray, y: np.ndarray, degree_max: int, q: Sequence[float], solver: str, target_loo,
@@ -165,13 +174,20 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
             solver: str = "ols", target_loo: float | None = 0.0, early_stop: bool = True,
             max_terms_ratio: float = MAX_TERMS_RATIO, parallel=None,
             progress: Callable[[int, int], None] | None = None,
-            families: Sequence[PolynomialFamily] | None = None, ranking: str = "lasso") -> PCEFit:
+            families: Sequence[PolynomialFamily] | None = None, ranking: str = "lasso",
+            prefix_rule: str = "min_loo") -> PCEFit:
     """Fit a PCE of ``y`` (N,) or (N, m) at reference points ``z`` (N, d), choosing degree and q as above.
 
     ``families`` gives each coordinate's orthonormal family (:mod:`.orthonormal_polynomials`); None means Legendre
-    for all, z in [-1, 1]^d. ``ranking`` ("lasso" or "lar", :data:`.lars.RANKINGS`) is how the LARS solver ranks
-    the regressors: the LASSO-modified path (default) or plain LAR (docs/surrogates.md, "Where spflow's PCE trails
-    OpenTURNS").
+    for all, z in [-1, 1]^d. ``ranking`` ("lasso", "lar" or "cv", :data:`.lars.RANKING_CHOICES`) is how the LARS
+    solver ranks the regressors: the LASSO-modified path (default), plain LAR, or per output the one of the two with
+    the smaller 10-fold cross-validation error of the LARS step; ``prefix_rule`` ("min_loo" or "one_se",
+    :data:`.lars.PREFIX_RULES`) how it chooses the nested model along the ranking: the smallest corrected LOO
+    (default) or the one-standard-error rule (:mod:`.lars`; docs/surrogates.md, "Where spflow's PCE trails
+    OpenTURNS"). The degree and q search always scores a basis by the smallest corrected LOO along a ranking (the
+    LASSO one for "cv"), whatever model the prefix rule keeps (scored by its one-SE model, the search stopped
+    Ishigami at N = 50 at degree 1); the cross-validated choice of the ranking is made on the selected basis only.
+    Both options are ignored by OLS.
 
     ``parallel`` (a :class:`joblib.Parallel`, e.g. ``ctx.parallel()``) spreads the per-output LARS fits over workers;
     ``progress(degree, degree_max)`` (e.g. from ``ctx.report_progress``) is told each degree tried, and
@@ -179,7 +195,7 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     degree is the cap.
     """
     from .basis import design_matrix, multi_indices  # numba/numpoly load when a PCE is fitted
-    from .lars import check_ranking  # scikit-learn loads when a PCE is fitted
+    from .lars import check_prefix_rule, check_ranking  # scikit-learn loads when a PCE is fitted
 
     z = np.atleast_2d(np.asarray(z, dtype=float))
     y = np.asarray(y, dtype=float)
@@ -187,6 +203,10 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     qs = [float(v) for v in (q if isinstance(q, Sequence) else [q])]
     _check(z, y, degree_max, qs, solver, target_loo, max_terms_ratio, families)
     check_ranking(ranking, "fit_pce")
+    check_prefix_rule(prefix_rule, "fit_pce")
+    if solver == "lars" and ranking == "cv" and z.shape[0] < 4:
+        raise ParameterError(f"fit_pce: ranking 'cv' needs N >= 4 training runs, got {z.shape[0]}")
+    search_ranking = "lasso" if ranking == "cv" else ranking
     max_terms = max(int(max_terms_ratio * z.shape[0]), MIN_TERMS)
     history: list[tuple[int, float, int, float]] = []
     best, best_score, degree_scores = None, np.inf, []
@@ -202,15 +222,15 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
                 too_big.append(indices.shape[0])
                 continue
             with single_threaded_blas():
-                coef, loo, modified, emp = _fit_basis(design_matrix(z, indices, families), y, solver, ranking,
-                                                            parallel)
-            score = float(np.mean(modified))
+                coef, loo, modified, emp, scores, rankings = _fit_basis(design_matrix(z, indices, families), y,
+                                                                        solver, search_ranking, prefix_rule, parallel)
+            score = float(np.mean(scores))
             history.append((degree, qv, indices.shape[0], score))
             q_scores.append(score)
             degree_best = min(degree_best, score)
             if score < best_score or best is None:
                 best_score = score
-                best = (indices, coef, degree, qv, loo, modified, emp)
+                best = (indices, coef, degree, qv, loo, modified, emp, rankings)
             if len(q_scores) > 2 and min(q_scores[-2:]) >= min(q_scores[:-2]):
                 break
         if not q_scores:  # every basis of this degree is over the size limit
@@ -227,7 +247,11 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
             break
     if progress is not None:  # done, whether at degree_max or stopped early
         progress(degree_max, degree_max)
-    indices, coef, degree, qv, loo, modified, emp = best
+    indices, coef, degree, qv, loo, modified, emp, rankings = best
+    if solver == "lars" and ranking == "cv":
+        with single_threaded_blas():
+            coef, loo, modified, emp, _, rankings = _fit_basis(design_matrix(z, indices, families), y, solver,
+                                                               ranking, prefix_rule, parallel)
     message = ""
     if not stopped and degree == cap:
         reason = (f"degree_max = {degree_max}" if cap == degree_max else
@@ -237,4 +261,5 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
                    f"corrected LOO error was still falling; a higher degree may fit better: raise degree_max, "
                    f"max_terms_ratio or the number of runs")
         warnings.warn(message, DegreeCapWarning, stacklevel=2)
-    return PCEFit(indices, coef, degree, qv, solver, loo, modified, emp, y.var(axis=0), history, cap, message)
+    return PCEFit(indices, coef, degree, qv, solver, loo, modified, emp, y.var(axis=0), history, cap, message,
+                  rankings)

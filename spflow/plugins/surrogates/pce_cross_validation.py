@@ -16,8 +16,7 @@ Var̂ the population variance of the N training outputs (the normalisation of Eq
 fitting procedure at (K − 1)N/K points, so it errs high wherever the error still falls fast with N (measured in
 docs/surrogates.md, "The reported error").
 
-Folds: the permutation ``numpy.random.default_rng(FOLD_SEED).permutation(N)`` split by ``numpy.array_split`` into K
-consecutive parts (sizes differ by at most one). Cost: K fits on (K − 1)N/K points, about K times the fit.
+Folds: :func:`.folds.fold_indices`. Cost: K fits on (K − 1)N/K points, about K times the fit.
 """
 
 from __future__ import annotations
@@ -30,17 +29,10 @@ import numpy as np
 from spflow.core.errors import DegreeCapWarning, ParameterError
 
 from .degree_adaptive import fit_pce
+from .folds import fold_indices
 from .regression import is_constant
 
-__all__ = ["FOLD_SEED", "fold_indices", "check_folds", "kfold_error"]
-
-#: Seed of the permutation that assigns the training points to folds.
-FOLD_SEED = 0
-
-
-def fold_indices(n: int, folds: int) -> list[np.ndarray]:
-    """The held-out indices of each of ``folds`` folds of ``n`` points (rule above)."""
-    return np.array_split(np.random.default_rng(FOLD_SEED).permutation(n), folds)
+__all__ = ["check_folds", "kfold_error"]
 
 
 def check_folds(folds, n: int, d: int, solver: str, where: str) -> None:

@@ -79,9 +79,10 @@ class PCE(Surrogate):
         unless ``inputs`` gives one marginal per parameter (:mod:`.input_marginals`; then ``lower``/``upper`` are
         their supports, :func:`.contract.input_box`), and ``x`` should be drawn from them: the coefficients are a
         least-squares projection under the empirical measure of ``x``. ``options`` go to
-        :func:`.degree_adaptive.fit_pce` (``degree_max``, ``q``, ``solver``, ``target_loo``, ``parallel``...), except
-        ``cv_folds`` (default 0): K >= 2 also cross-validates the whole fit K-fold (:mod:`.pce_cross_validation`,
-        about K times the fit's cost), and that error is then the one reported (:attr:`reported_error`)."""
+        :func:`.degree_adaptive.fit_pce` (``degree_max``, ``q``, ``solver``, ``target_loo``, ``parallel``, ``ranking``,
+        ``prefix_rule``...), except ``cv_folds`` (default 0): K >= 2 also cross-validates the whole fit K-fold
+        (:mod:`.pce_cross_validation`, about K times the fit's cost), and that error is then the one reported
+        (:attr:`reported_error`)."""
         marginals = resolve_inputs(names, lower, upper, inputs, "PCE.fit")
         x = np.atleast_2d(np.asarray(x, dtype=float))
         if x.shape[1] != len(names):
