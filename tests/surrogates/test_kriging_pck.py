@@ -60,7 +60,7 @@ def test_optimal_mode_keeps_a_loo_chosen_prefix_of_the_lars_order():
     opt = PCK.fit(NAMES, lower, upper, _index(1), x, y, degree_max=4, restarts=3, mode="optimal")
     # the hybrid LARS ranking on the chosen PCE basis, recomputed here
     basis_rows = opt.indices
-    full = hybrid_lars(design_matrix(opt.to_unit(x), basis_rows), y[:, 0]).active
+    full = hybrid_lars(design_matrix(opt.to_unit(x), basis_rows), y[:, 0], prefix_rule="min_loo").active
     chosen = np.flatnonzero(opt.trend[0])
     assert set(chosen) == set(full[: chosen.size])
     assert set(np.flatnonzero(seq.trend[0])) == set(full)

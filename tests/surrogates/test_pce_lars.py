@@ -50,7 +50,7 @@ def test_selected_model_is_the_ols_refit_with_its_errors():
     psi = _basis(seed=4)
     z1 = psi[:, 1]
     y = np.tanh(2 * z1) + 0.3 * psi[:, 7] * psi[:, 2] + 0.02 * np.random.default_rng(5).normal(size=psi.shape[0])
-    result = hybrid_lars(psi, y)
+    result = hybrid_lars(psi, y, prefix_rule="min_loo")
     refit = ols(psi[:, result.active], y)
     np.testing.assert_allclose(result.coefficients[result.active], refit.coefficients, rtol=1e-8, atol=1e-12)
     assert np.count_nonzero(result.coefficients) == result.active.size
@@ -191,7 +191,7 @@ def test_one_standard_error_rule_by_hand_along_the_least_angle_ranking(seed):
     np.testing.assert_allclose(result.modified_loo, scores[one_se], rtol=1e-8)
     refit = np.linalg.lstsq(psi[:, order[: one_se + 1]], y, rcond=None)[0]
     np.testing.assert_allclose(result.coefficients[result.active], refit, rtol=1e-8, atol=1e-12)
-    assert hybrid_lars(psi, y, ranking="lar").active.size == best + 1  # the default rule: the minimum
+    assert hybrid_lars(psi, y, ranking="lar", prefix_rule="min_loo").active.size == best + 1  # the other rule
 
 
 def _ten_fold_error(psi, y, ranking):
@@ -233,19 +233,30 @@ def test_cross_validated_ranking_is_the_textbook_ten_fold_choice_per_output():
 @pytest.mark.filterwarnings("ignore::spflow.core.errors.DegreeCapWarning")
 @pytest.mark.parametrize("ranking, prefix_rule", [("cv", "one_se"), ("lasso", "one_se"), ("cv", "min_loo")])
 def test_fit_pce_applies_the_selection_options_to_the_basis_the_default_search_selects(ranking, prefix_rule):
-    """The degree and q search is the default's (a basis scored by the smallest corrected LOO along the LASSO path);
-    the one-SE rule and the cross-validated ranking replace only the model on the selected basis."""
+    """The degree and q search is the same whatever the options (a basis scored by the smallest corrected LOO along
+    the LASSO path); the one-SE rule and the cross-validated ranking replace only the model on the selected basis."""
+    z = np.random.default_rng(3).uniform(-1, 1, (80, 3))
+    y = np.abs(z[:, 0]) + np.exp(z[:, 1]) * z[:, 2]
+    minimum = fit_pce(z, y, solver="lars", degree_max=6, prefix_rule="min_loo")
+    chosen = fit_pce(z, y, solver="lars", degree_max=6, ranking=ranking, prefix_rule=prefix_rule)
+    assert not np.allclose(chosen.coefficients, minimum.coefficients)  # the options change the model here
+    assert (chosen.degree, chosen.q, chosen.history) == (minimum.degree, minimum.q, minimum.history)
+    np.testing.assert_array_equal(chosen.indices, minimum.indices)
+    on_basis = hybrid_lars(design_matrix(z, minimum.indices), y, ranking=ranking, prefix_rule=prefix_rule)
+    np.testing.assert_allclose(chosen.coefficients[0], on_basis.coefficients, rtol=1e-12, atol=1e-14)
+    assert chosen.rankings == (on_basis.ranking,) and minimum.rankings == ("lasso",)
+    np.testing.assert_allclose(chosen.modified_loo[0], on_basis.modified_loo)
+
+
+def test_the_default_lars_model_is_the_one_se_model_of_the_lasso_ranking():
     z = np.random.default_rng(3).uniform(-1, 1, (80, 3))
     y = np.abs(z[:, 0]) + np.exp(z[:, 1]) * z[:, 2]
     default = fit_pce(z, y, solver="lars", degree_max=6)
-    chosen = fit_pce(z, y, solver="lars", degree_max=6, ranking=ranking, prefix_rule=prefix_rule)
-    assert not np.allclose(chosen.coefficients, default.coefficients)  # the options change the model here
-    assert (chosen.degree, chosen.q, chosen.history) == (default.degree, default.q, default.history)
-    np.testing.assert_array_equal(chosen.indices, default.indices)
-    on_basis = hybrid_lars(design_matrix(z, default.indices), y, ranking=ranking, prefix_rule=prefix_rule)
-    np.testing.assert_allclose(chosen.coefficients[0], on_basis.coefficients, rtol=1e-12, atol=1e-14)
-    assert chosen.rankings == (on_basis.ranking,) and default.rankings == ("lasso",)
-    np.testing.assert_allclose(chosen.modified_loo[0], on_basis.modified_loo)
+    explicit = fit_pce(z, y, solver="lars", degree_max=6, ranking="lasso", prefix_rule="one_se")
+    np.testing.assert_array_equal(default.coefficients, explicit.coefficients)
+    psi = design_matrix(z, default.indices)
+    np.testing.assert_array_equal(hybrid_lars(psi, y).coefficients,
+                                  hybrid_lars(psi, y, ranking="lasso", prefix_rule="one_se").coefficients)
 
 
 def test_unknown_prefix_rule_is_refused():

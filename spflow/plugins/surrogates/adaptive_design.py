@@ -44,8 +44,9 @@ class AdaptivePCE(Stage):
     name = "adaptive_pce"
     # 2: the pce fit's degree cap 15, basis-size limit and corrected-LOO error variance; 3: + UDUNITS units per
     # element; 4: the space's marginals honoured and recorded (issue #24); 5: default degree_max 20 (was 15); 6: the
-    # pce stage's cv_folds (attrs cv_folds, error_estimate) and LARS path scaled to the output (lars.PATH_SCALE)
-    version = "6"
+    # pce stage's cv_folds (attrs cv_folds, error_estimate) and LARS path scaled to the output (lars.PATH_SCALE); 7:
+    # the LARS solver keeps the one-SE model of its path (lars.PREFIX_RULES)
+    version = "7"
     description = "PCE proxy on a growing LHS design until the mean LOO error settles (Algorithm 2)"
     inputs = {"space": SPACE}
     output = STORED_SURROGATE

@@ -175,7 +175,7 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
             max_terms_ratio: float = MAX_TERMS_RATIO, parallel=None,
             progress: Callable[[int, int], None] | None = None,
             families: Sequence[PolynomialFamily] | None = None, ranking: str = "lasso",
-            prefix_rule: str = "min_loo") -> PCEFit:
+            prefix_rule: str = "one_se") -> PCEFit:
     """Fit a PCE of ``y`` (N,) or (N, m) at reference points ``z`` (N, d), choosing degree and q as above.
 
     ``families`` gives each coordinate's orthonormal family (:mod:`.orthonormal_polynomials`); None means Legendre
@@ -183,7 +183,7 @@ def fit_pce(z: np.ndarray, y: np.ndarray, degree_max: int = DEGREE_MAX, q: float
     solver ranks the regressors: the LASSO-modified path (default), plain LAR, or per output the one of the two with
     the smaller 10-fold cross-validation error of the LARS step; ``prefix_rule`` ("min_loo" or "one_se",
     :data:`.lars.PREFIX_RULES`) how it chooses the nested model along the ranking: the smallest corrected LOO
-    (default) or the one-standard-error rule (:mod:`.lars`; docs/surrogates.md, "Where spflow's PCE trails
+    or the one-standard-error rule (default) (:mod:`.lars`; docs/surrogates.md, "Where spflow's PCE trails
     OpenTURNS"). The degree and q search always scores a basis by the smallest corrected LOO along a ranking (the
     LASSO one for "cv"), whatever model the prefix rule keeps (scored by its one-SE model, the search stopped
     Ishigami at N = 50 at degree 1); the cross-validated choice of the ranking is made on the selected basis only.

@@ -78,8 +78,9 @@ class PCEStage(Stage):
     # 2: degree cap 15 + basis-size limit, corrected LOO as the error variance, degree_cap attrs; 3: + UDUNITS units
     # per element; 4: the space's marginals honoured and recorded (distribution, distribution_parameters; issue #24);
     # 5: default degree_max 20 (was 15); 6: cv_folds, attrs cv_folds and error_estimate (+ cv_error when K >= 2), the
-    # LARS path scaled to the output (lars.PATH_SCALE: small-valued outputs were cut short)
-    version = "6"
+    # LARS path scaled to the output (lars.PATH_SCALE: small-valued outputs were cut short); 7: the LARS solver keeps
+    # the one-SE model of its path (lars.PREFIX_RULES)
+    version = "7"
     description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
     output = STORED_SURROGATE

@@ -43,7 +43,10 @@ class PCK(KrigingSurrogate):
         families = [m.polynomials for m in marginals]
         z = reference_points(marginals, x)
         pce = fit_pce(z, y, degree_max=degree_max, q=q, solver="lars", parallel=parallel, families=families)
-        ranked = [r.active for r in hybrid_lars_outputs(design_matrix(z, pce.indices, families), y)]
+        # the trend's candidates: the ranking up to its smallest corrected LOO (the Kriging LOO then chooses among its
+        # prefixes, mode "optimal"), not the shorter one-SE model the sparse PCE keeps
+        ranked = [r.active for r in hybrid_lars_outputs(design_matrix(z, pce.indices, families), y,
+                                                        prefix_rule="min_loo")]
         used = np.unique(np.concatenate(ranked))  # keep only the terms some output's trend can use
         orders = [np.searchsorted(used, r) for r in ranked]
         info = {"pce_degree": pce.degree, "pce_q": pce.q, "pce_loo_mean": pce.loo_mean}
