@@ -31,9 +31,9 @@ Columns (medians over the output columns of a fit, then over the seeds):
   columns whose validation outputs are constant up to round-off are not scored;
 * ``LOO/eps``: the method's own leave-one-out estimate divided by ``eps_val``. spflow PCE: the error the model
   reports for a calibration (``PCE.error_variance / output_variance``: the corrected LOO; ``spflow_cv``, the same fit
-  with ``cv_folds=10``: the 10-fold cross-validation error of the whole adaptive fit; ``spflow_one_se``, the same fit
-  with ``prefix_rule="one_se"``, and ``spflow_one_se_cv``, with ``ranking="cv", prefix_rule="one_se"``: the corrected
-  LOO of the model they keep); spflow GP/PCK: their Kriging (Dubrule) LOO; OpenTURNS: the corrected LOO of the
+  with ``cv_folds=10``: the 10-fold cross-validation error of the whole adaptive fit; ``spflow_min_loo``, the same fit
+  with ``prefix_rule="min_loo"`` (the default before the one-SE rule), and ``spflow_one_se_cv``, with
+  ``ranking="cv", prefix_rule="one_se"``: the corrected LOO of the model they keep); spflow GP/PCK: their Kriging (Dubrule) LOO; OpenTURNS: the corrected LOO of the
   selected basis (the smallest entry of ``getErrorHistory``); chaospy: the plain LOO of the OLS fit from its hat matrix
   (chaospy has no error estimate; computed here); scikit-learn: the closed-form LOO of the fitted GP (computed here);
 * ``fit CPU``: process CPU time of the fit of all columns, seconds (the peers' own threads included);
@@ -219,7 +219,7 @@ def fit_sklearn_gp(kernel: str):
 
 
 METHODS = {"spflow": fit_spflow(), "spflow_cv": fit_spflow(cv_folds=10),
-           "spflow_one_se": fit_spflow(prefix_rule="one_se"),
+           "spflow_min_loo": fit_spflow(prefix_rule="min_loo"),
            "spflow_one_se_cv": fit_spflow(ranking="cv", prefix_rule="one_se"), "openturns": fit_openturns,
            "chaospy": fit_chaospy,
            "spflow_gp": fit_spflow_kriging(GP), "spflow_gp_matern": fit_spflow_kriging(GP, kernel="matern52"),
