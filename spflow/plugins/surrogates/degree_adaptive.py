@@ -109,8 +109,8 @@ class PCEFit:
 def _fit_basis(psi: np.ndarray, y: np.ndarray, solver: str, ranking: str, prefix_rule: str,
                parallel) -> tuple[np.ndarray, ...]:
     """(coefficients (m, P), loo, modified_loo, empirical, score, rankings) of one basis. ``score`` (m,) is what the
-    degree search compares: the smallest corrected LOO along each output's LARS path (the selected model's for the
-    default prefix rule) or the OLS fit's; ``rankings`` the ranking each output's LARS model comes from (empty for
+    degree search compares: the smallest corrected LOO along each output's LARS path (the selected model's for
+    ``prefix_rule="min_loo"``) or the OLS fit's; ``rankings`` the ranking each output's LARS model comes from (empty for
     OLS)."""
     from .lars import hybrid_lars_outputs  # scikit-learn loads when a PCE is fitted
 

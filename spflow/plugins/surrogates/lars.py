@@ -36,10 +36,10 @@ OpenTURNS"):
 * ``prefix_rule``: ``"min_loo"`` keeps the nested model with the smallest corrected LOO (the rule before issue
   #24's benchmark); ``"one_se"``, the default since then, is the one-standard-error rule (Breiman, Friedman, Olshen &
   Stone 1984, CART §3.4.3; Hastie, Tibshirani & Friedman 2009, ESL §7.10): instead of the nested model with the
-  smallest corrected LOO, the smallest one (fewest terms) whose corrected LOO is within one standard error of that minimum. The standard error
-  needs no refit: it is T(P*, N) times the standard error of the mean of the N squared, normalised LOO residuals
-  e_i² / Var̂(y), e_i = (y_i − ŷ_i)/(1 − h_i), of the minimising model (P* terms), sd(e²)/√N with the N − 1
-  divisor. It counters the optimism of a minimum taken over many nested models by preferring fewer terms. On the
+  smallest corrected LOO, the smallest one (fewest terms) whose corrected LOO is within one standard error of that
+  minimum. The standard error needs no refit: it is T(P*, N) times the standard error of the mean of the N squared,
+  normalised LOO residuals e_i² / Var̂(y), e_i = (y_i − ŷ_i)/(1 − h_i), of the minimising model (P* terms),
+  sd(e²)/√N with the N − 1 divisor. It counters the optimism of a minimum taken over many nested models by preferring fewer terms. On the
   benchmark's 60 analytic designs and the simulator it costs what the minimum costs, is at or below OpenTURNS' LARS on
   11 of 12 analytic rows (the minimum: 9) and more accurate on the simulator at N = 50, 100 and 400, and its corrected
   LOO is nearer the true error (within [0.7, 1.4] on 9 of 16 rows against 5); it is less accurate than the minimum on

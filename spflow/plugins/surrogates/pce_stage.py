@@ -81,7 +81,7 @@ class PCEStage(Stage):
     # LARS path scaled to the output (lars.PATH_SCALE: small-valued outputs were cut short); 7: the LARS solver keeps
     # the one-SE model of its path (lars.PREFIX_RULES)
     version = "7"
-    description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, LOO-selected) of responses"
+    description = "degree-adaptive polynomial chaos proxy (OLS or hybrid LARS, chosen by corrected LOO) of responses"
     inputs = {"space": SPACE, "design": DESIGN, "responses": RESPONSES}
     output = STORED_SURROGATE
     params = PCE_PARAMS
