@@ -98,7 +98,7 @@ class Options:
     economy: bool = True
     #: Jacobians of the first, budgeted round of every multi-start fit (candidate refits, joint subset refits, a
     #: multi-start base calibration): ``"difference"`` (a forward difference at every accepted step) or ``"secant"``
-    #: (Broyden updates from one forward difference per start: about half the forward runs, but it changes
+    #: (Broyden updates from one forward difference per start: 0.4-0.55 of the forward runs, but it changes
     #: results -- verdicts and ambiguity sets of twins -- so it is opt-in; least_squares.py, docs/gap.md, Cost)
     first_round_jacobian: str = "difference"
 

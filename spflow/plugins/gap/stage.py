@@ -79,7 +79,7 @@ OPTION_PARAMS = {
     "first_round_jacobian": Param(str, "difference", choices=["difference", "secant"],
                                   doc="Jacobians of the first round of a multi-start fit (refits): a forward "
                                       "difference at every step, or Broyden updates from one forward difference "
-                                      "per start (about half the forward runs; changes results)"),
+                                      "per start (0.4-0.55 of the forward runs; changes results)"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
     "nuisance_scale": Param(float, 0.5, bounds=(1e-3, 1e3),
                             doc="prior scale of calibrated-parameter shifts in the unit box (projection, Laplace)"),
