@@ -2,9 +2,17 @@
 
     python benchmarks/bench_diagnosis.py --jobs 2            # 100 cells: the bundled data and a twin pair
     python benchmarks/bench_diagnosis.py --quick --jobs 2    # 60 cells (smoke run)
+    python benchmarks/bench_diagnosis.py --jobs 2 --cases bundled --modes exact,secant   # one case, two modes
 
-Two cases, each diagnosed twice in the same process -- with the cost reductions off (``Options(economy=False)``,
-the behaviour before them) and on -- so the table shows before and after side by side:
+Two cases, each diagnosed in up to three modes in the same process, so the table shows them side by side:
+
+* ``before`` -- every cost reduction off (``Options(economy=False, first_round_jacobian="difference")``);
+* ``exact`` -- the exact reductions only (``economy=True``, forward-difference Jacobians in the first round of a
+  multi-start fit: the default options);
+* ``secant`` -- the exact reductions plus Broyden (secant) Jacobians in the first round of every multi-start fit
+  (``first_round_jacobian="secant"``, an option that changes results: docs/gap.md, Cost).
+
+The cases:
 
 * ``bundled`` -- the ``gap_diagnosis`` pipeline's diagnosis of the bundled study (BCF1 + BCF2 calibrate, BCF3
   held out, the nine Table 3.2 parameters, every catalogue effect a candidate), default options;
@@ -15,8 +23,8 @@ the behaviour before them) and on -- so the table shows before and after side by
 Per run it prints the forward runs, their CPU seconds, the diagnosing process's own CPU seconds and the wall
 seconds of every phase of the diagnosis (:mod:`spflow.plugins.gap.cost`), the total wall and CPU seconds (this process plus its joblib workers, read from
 ``/proc``: on a machine shared with other jobs the wall time grows with the load, the CPU time hardly; the load
-average is printed with the table), and the verdict, ambiguity set and fitted strengths -- which must be the same
-before and after (the script says so, or names the difference).
+average is printed with the table), and the verdict, ambiguity set and fitted strengths of every mode, with the
+largest difference from the first mode run (the script says whether verdict and ambiguity set are the same).
 """
 
 from __future__ import annotations
@@ -91,13 +99,19 @@ def twin_case(cells: int):
     return [data[0]], [data[1]], base, stage.options
 
 
-def run(case: str, cells: int, economy: bool, parallel) -> dict:
+#: mode -> the options it replaces
+MODES = {"before": {"economy": False, "first_round_jacobian": "difference"},
+         "exact": {"economy": True, "first_round_jacobian": "difference"},
+         "secant": {"economy": True, "first_round_jacobian": "secant"}}
+
+
+def run(case: str, cells: int, mode: str, parallel) -> dict:
     cal, held, base, options = (bundled_case if case == "bundled" else twin_case)(cells)
-    options = replace(options, economy=economy)
+    options = replace(options, **MODES[mode])
     cpu, wall = _cpu_seconds(), time.perf_counter()
     g = diagnose(cal, held, base, None, options, parallel=parallel)
     wall, cpu = time.perf_counter() - wall, _cpu_seconds() - cpu
-    return {"case": case, "cells": cells, "mode": "after" if economy else "before", "cost": g.cost,
+    return {"case": case, "cells": cells, "mode": mode, "cost": g.cost,
             "runs": g.forward_runs, "wall": wall, "cpu": cpu, "verdict": g.verdict, "ambiguity": g.ambiguity,
             "strengths": g.final_fit.strengths, "chi2": g.final_fit.chi2,
             "tried": {k: v for k, v in g.tried.items()}}
@@ -125,8 +139,11 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="60 cells instead of 100")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--cases", default="bundled,twin", help="comma-separated: bundled, twin")
-    ap.add_argument("--modes", default="before,after", help="comma-separated: before, after")
+    ap.add_argument("--modes", default="before,exact,secant", help=f"comma-separated: {', '.join(MODES)}")
     args = ap.parse_args()
+    unknown = sorted(set(args.modes.split(",")) - set(MODES))
+    if unknown:
+        ap.error(f"unknown modes {unknown}; allowed {list(MODES)}")
     cells = 60 if args.quick else 100
     with parallel_config(backend="loky", inner_max_num_threads=1):
         parallel = Parallel(n_jobs=args.jobs) if args.jobs > 1 else None
@@ -139,24 +156,27 @@ def main() -> None:
     rows = []
     for case in args.cases.split(","):
         for mode in args.modes.split(","):
-            r = run(case, cells, mode == "after", parallel)
+            r = run(case, cells, mode, parallel)
             rows.append(r)
             phases = ", ".join(f"{p} {c.runs} runs ({c.run_cpu_s:.1f} CPU s) + {c.own_cpu_s:.1f} CPU s own, "
                                f"{c.wall_s:.0f} s wall" for p, c in r["cost"].items())
-            print(f"{case} {mode}: {r['runs']} runs, wall {r['wall']:.0f} s, CPU {r['cpu']:.0f} s; {phases}; "
+            print(f"{case} {mode}: {r['runs']} runs, wall {r['wall']:.0f} s, CPU {r['cpu']:.0f} s (parallel "
+                  f"efficiency CPU / (jobs x wall) {r['cpu'] / (args.jobs * r['wall']):.2f}); {phases}; "
                   f"verdict {r['verdict']} {r['ambiguity']}, strengths {r['strengths']}", flush=True)
     print(f"\nload average {os.getloadavg()[0]:.1f} (2 cores shared with other jobs), jobs {args.jobs}")
     print("\n".join(_table(rows)))
     for case in args.cases.split(","):
-        pair = [r for r in rows if r["case"] == case]
-        if len(pair) == 2:
-            a, b = pair
+        a, *others = [r for r in rows if r["case"] == case]
+        for b in others:
             same = a["verdict"] == b["verdict"] and a["ambiguity"] == b["ambiguity"]
-            diff = max([abs(a["strengths"][k] - b["strengths"].get(k, np.nan)) for k in a["strengths"]] + [0.0])
-            tried = max([abs(a["tried"][k] - b["tried"].get(k, np.nan)) for k in a["tried"]] + [0.0])
-            print(f"{case}: verdict and ambiguity set {'identical' if same else 'DIFFER'}; largest strength "
-                  f"difference {diff:.3g} (final model), {tried:.3g} (tried effects); chi2 {a['chi2']:.3f} / "
-                  f"{b['chi2']:.3f}")
+            diff = max([abs(a["strengths"][k] - b["strengths"].get(k, np.nan)) / abs(a["strengths"][k])
+                        for k in a["strengths"]] + [0.0])
+            tried = max([abs(a["tried"][k] - b["tried"].get(k, np.nan)) / abs(a["tried"][k]) for k in a["tried"]]
+                        + [0.0])
+            print(f"{case} {a['mode']} -> {b['mode']}: verdict and ambiguity set {'identical' if same else 'DIFFER'}; "
+                  f"largest relative strength difference {diff:.3g} (final model), {tried:.3g} (tried effects); "
+                  f"chi2 {a['chi2']:.3f} / {b['chi2']:.3f}; strengths {a['strengths']} / {b['strengths']}, tried "
+                  f"{a['tried']} / {b['tried']}")
 
 
 if __name__ == "__main__":

@@ -166,3 +166,114 @@ def test_leave_one_slug_out_equals_closed_form_least_squares():
         w = out.whitened[held]
         expected = -0.5 * w @ np.linalg.solve(S, w) - 0.5 * np.linalg.slogdet(S)[1]
         assert out.lpd[held].sum() == pytest.approx(expected, rel=1e-4)
+
+
+def test_secant_update_is_the_least_change_satisfying_the_secant_condition():
+    """Broyden's update against its definition, solved here as an equality-constrained least-norm problem: the
+    matrix J nearest to J0 (Frobenius) with J s = f(z1) - f(z0). The first Jacobian is a forward difference; on an
+    affine residual every update keeps the exact matrix."""
+    from spflow.plugins.gap.least_squares import SecantJacobian
+
+    rng = np.random.default_rng(3)
+    A, c = rng.normal(size=(5, 3)), rng.normal(size=5)
+
+    class Problem:   # residual f(z) = sin(A z) + c, its forward difference with step h (the WhitenedProblem API)
+        h, calls = 1e-6, 0
+
+        def fun(self, z):
+            return np.sin(A @ z) + c
+
+        def jac(self, z, f0=None):
+            self.calls += 1
+            return np.column_stack([(self.fun(z + self.h * e) - self.fun(z)) / self.h for e in np.eye(3)])
+
+    problem = Problem()
+    secant = SecantJacobian(problem)
+    z0, z1, z2 = np.array([0.1, 0.2, 0.3]), np.array([0.15, 0.1, 0.35]), np.array([0.2, 0.12, 0.3])
+    J0 = secant(z0)
+    np.testing.assert_allclose(J0, np.cos(A @ z0)[:, None] * A, rtol=1e-4, atol=1e-5)   # analytic derivative
+    for za, zb in ((z0, z1), (z1, z2)):
+        J_prev = J0 if za is z0 else J1
+        J1 = secant(zb)
+        s, y = zb - za, problem.fun(zb) - problem.fun(za)
+        # min ||vec(J) - vec(J_prev)|| s.t. (s^T kron I) vec(J) = y: minimum-norm correction of the constraint
+        M = np.stack([np.concatenate([s if k == i else np.zeros(3) for k in range(5)]) for i in range(5)])
+        d = np.linalg.lstsq(M, y - J_prev @ s, rcond=None)[0]
+        np.testing.assert_allclose(J1, J_prev + d.reshape(5, 3), rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(J1 @ s, y, rtol=1e-10, atol=1e-12)
+    assert problem.calls == 1 and secant.differences == 1
+    # affine residual: the forward difference is exact and every update leaves it unchanged
+    problem.fun = lambda z: A @ z + c
+    affine = SecantJacobian(problem)
+    for z in (z0, z1, z2):
+        np.testing.assert_allclose(affine(z), A, rtol=1e-6, atol=1e-6)
+
+
+def test_secant_first_round_follows_the_documented_procedure():
+    """first_round="secant": every start runs a third of the budget with one forward-difference Jacobian at the
+    start and Broyden updates after it (written out in the test with plain scipy), the best start continues with
+    forward differences and the full budget; the first round takes one forward-difference Jacobian per start only."""
+    from scipy.optimize import least_squares
+
+    rng = np.random.default_rng(7)
+    lay = layout(model(1.2, 80.0, 0.3) + 0.01 * rng.normal(size=PV.size))
+    h, max_nfev = 0.01, 15
+    starts = [np.array([0.1, 0.9, 0.9]), np.array([0.5, 0.5, 0.5]), np.array([0.9, 0.2, 0.1])]
+
+    seen = set()   # the distinct points the procedure runs
+
+    def residual(z):
+        seen.add(tuple(z))
+        a, b = BASE.values(z[:2])
+        return lay.whiten(model(a, b, EFFECT.value(z[2])) - lay.observed())
+
+    def difference(z):
+        steps = np.where(z + h <= 1.0, h, -h)
+        return np.column_stack([(residual(z + steps[j] * np.eye(3)[j]) - residual(z)) / steps[j] for j in range(3)])
+
+    def broyden():
+        state = {}
+
+        def jac(z):
+            if not state:
+                state.update(z=z.copy(), J=difference(z))
+            else:
+                s = z - state["z"]
+                y = residual(z) - residual(state["z"])
+                if s @ s > 0:
+                    state["J"] = state["J"] + np.outer(y - state["J"] @ s, s) / (s @ s)
+                state["z"] = z.copy()
+            return state["J"]
+        return jac
+
+    def solve(z0, budget, jac):
+        return least_squares(residual, z0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale=1.0,
+                             ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=budget)
+
+    first = [solve(z0, max_nfev // 3, broyden()) for z0 in starts]
+    reference = solve(min(first, key=lambda r: r.cost).x, max_nfev, difference)
+    predictor = AnalyticPredictor()
+    result = fit(predictor, lay, starts, (EFFECT,), max_nfev=max_nfev, diff_step=h, first_round="secant")
+    np.testing.assert_allclose(result.z, reference.x, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(result.residual, reference.fun, rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(result.jacobian, reference.jac, rtol=1e-9, atol=1e-9)
+    # the forward runs are the points the procedure evaluates, fewer than with forward differences in the first round
+    assert len(predictor.distinct) == len(seen)
+    every_step = AnalyticPredictor()
+    fit(every_step, lay, starts, (EFFECT,), max_nfev=max_nfev, diff_step=h, first_round="difference")
+    assert len(predictor.distinct) < len(every_step.distinct)
+    with pytest.raises(ParameterError, match="first_round = 'broyden' is not allowed"):
+        fit(AnalyticPredictor(), lay, starts, (EFFECT,), first_round="broyden")
+
+
+def test_first_round_jacobian_option_is_checked_before_any_work():
+    from spflow.plugins.gap.diagnosis import Options, diagnose
+    from spflow.plugins.gap.stage import Diagnose
+
+    base = BaseModel.from_mapping({"cells": 12, "parameters": {"AP1": [5.0, 40.0]}})
+    with pytest.raises(ParameterError, match=r"first_round_jacobian = 'exact' is not allowed; allowed "
+                                             r"\['difference', 'secant'\]"):
+        diagnose(["no_such_file.nc"], [], base, options=Options(first_round_jacobian="exact"))
+    with pytest.raises(ParameterError, match="first_round_jacobian"):
+        Diagnose(first_round_jacobian="exact")
+    assert Diagnose(first_round_jacobian="difference").options.first_round_jacobian == "difference"

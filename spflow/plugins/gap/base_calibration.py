@@ -52,9 +52,9 @@ def parameter_set_starts(base, sets: xr.Dataset, max_members: int = 32) -> np.nd
 
 def calibrate_base(predictor: Predictor, layout: Layout, *, starts: int = 1, seed: int = 0, max_nfev: int = 30,
                    diff_step: float = 0.01, parameter_sets: np.ndarray | None = None, polish: bool = True,
-                   economy: bool = True) -> Fit:
-    """The calibrated base model on ``layout`` (module docstring); ``economy``: see
-    :func:`~spflow.plugins.gap.least_squares.fit`."""
+                   economy: bool = True, first_round: str = "difference") -> Fit:
+    """The calibrated base model on ``layout`` (module docstring); ``economy`` and ``first_round`` (with several
+    starts): see :func:`~spflow.plugins.gap.least_squares.fit`."""
     base = predictor.base
     if parameter_sets is not None:
         problem = WhitenedProblem(predictor, layout, (), len(base.parameters), diff_step)
@@ -67,4 +67,5 @@ def calibrate_base(predictor: Predictor, layout: Layout, *, starts: int = 1, see
     points = [base.default_unit()]
     if starts > 1:
         points += list(qmc.LatinHypercube(d=len(base.parameters), seed=seed).random(starts - 1))
-    return fit(predictor, layout, points, max_nfev=max_nfev, diff_step=diff_step, economy=economy)
+    return fit(predictor, layout, points, max_nfev=max_nfev, diff_step=diff_step, economy=economy,
+               first_round=first_round)

@@ -66,16 +66,16 @@ def shortlist(result: ScreenResult, size: int, cos_threshold: float = 0.9, absor
 
 def refit(predictor: Predictor, layout: Layout, reference: Fit, candidate: CandidateEffect,
           fresh: np.ndarray | None = None, *, max_nfev: int = 30, diff_step: float = 0.01,
-          economy: bool = True) -> Fit:
+          economy: bool = True, first_round: str = "difference") -> Fit:
     """The reference model plus ``candidate``, fitted on ``layout``. Starts, with the new strength at each of its
     test strengths: the reference optimum (nested), and, if given, the unit-box parameters ``fresh`` (the base
     calibration's own start) with the reference strengths -- re-calibration with the effect on from scratch,
-    because the reference optimum has already bent the parameters to mimic the missing effect. ``economy``: see
-    :func:`~spflow.plugins.gap.least_squares.fit`."""
+    because the reference optimum has already bent the parameters to mimic the missing effect. ``economy`` and
+    ``first_round``: see :func:`~spflow.plugins.gap.least_squares.fit`."""
     starts = []
     for level in candidate.levels:
         starts.append(np.concatenate((reference.z, [candidate.unit(level)])))
         if fresh is not None:
             starts.append(np.concatenate((fresh, reference.z[reference.n_params:], [candidate.unit(level)])))
     return fit(predictor, layout, starts, reference.candidates + (candidate,), max_nfev=max_nfev,
-               diff_step=diff_step, economy=economy)
+               diff_step=diff_step, economy=economy, first_round=first_round)

@@ -46,7 +46,7 @@ from .change_points import ChangePoint, change_points
 from .fingerprints import NuisanceProjector, ScreenResult, screen
 from .input_correlation import InputCorrelation, input_correlations
 from .layout import Layout, make_layout
-from .least_squares import Fit, WhitenedProblem, fit
+from .least_squares import FIRST_ROUND_JACOBIANS, Fit, WhitenedProblem, fit
 from .localisation import Cell, cells, gap_cells, ljung_box
 from .numerical_error import DEFAULT_VARIANTS, NumericalSpread, Numerics, inflate, numerical_spread
 from .numerical_scale import NumericalScale, estimate_scale
@@ -96,6 +96,11 @@ class Options:
     #: exact cost reductions on (same results, fewer forward runs and less CPU; ``False``: the behaviour before,
     #: for benchmarks)
     economy: bool = True
+    #: Jacobians of the first, budgeted round of every multi-start fit (candidate refits, joint subset refits, a
+    #: multi-start base calibration): ``"difference"`` (a forward difference at every accepted step) or ``"secant"``
+    #: (Broyden updates from one forward difference per start: 0.4-0.55 of the forward runs, but it changes
+    #: results -- verdicts and ambiguity sets of twins -- so it is opt-in; least_squares.py, docs/gap.md, Cost)
+    first_round_jacobian: str = "difference"
 
 
 @dataclass
@@ -270,6 +275,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     if not 0.0 <= options.numerical_scale_max <= 10.0:
         raise ParameterError(f"numerical_scale_max = {options.numerical_scale_max!r} is out of range; allowed "
                              "[0, 10] (the cap of the numerical-error scale)")
+    if options.first_round_jacobian not in FIRST_ROUND_JACOBIANS:
+        raise ParameterError(f"first_round_jacobian = {options.first_round_jacobian!r} is not allowed; allowed "
+                             f"{list(FIRST_ROUND_JACOBIANS)}")
     cal = load_experiments(calibration, options.pv_step, base.schedules)
     held = load_experiments(heldout, options.pv_step, base.schedules)
     clash = sorted({e.name for e in cal} & {e.name for e in held})
@@ -298,7 +306,8 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     say(f"calibrating the base model on {', '.join(e.name for e in cal)} ({layout_fit.size} points)")
     base_fit = calibrate_base(predictor, layout_fit, starts=options.starts, seed=options.seed,
                               max_nfev=options.max_nfev, diff_step=options.diff_step,
-                              parameter_sets=parameter_sets, polish=polish, economy=options.economy)
+                              parameter_sets=parameter_sets, polish=polish, economy=options.economy,
+                              first_round=options.first_round_jacobian)
     chi2_measurement = base_fit.chi2
     numerical, scale = None, None
     if options.numerical_variants:
@@ -377,7 +386,8 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
             c = remaining[i]
             say(f"refitting {_label(fitting)}+{c.name} (screen z = {result.best_z()[i]:.2f})")
             f = refit(predictor, layout_fit, fitting, c, base_fit.start[: base_fit.n_params],
-                      max_nfev=options.max_nfev, diff_step=options.diff_step, economy=options.economy)
+                      max_nfev=options.max_nfev, diff_step=options.diff_step, economy=options.economy,
+                      first_round=options.first_round_jacobian)
             w = out_of_sample(f)
             consistent = _physical(f, options.nuisance_scale, options.rule)
             physical = all(consistent[x.name] for x in f.candidates if x.name not in
@@ -473,7 +483,8 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         break
                 say(f"joint refit base+{'+'.join(names)}")
                 fits[names] = fit(predictor, layout_fit, starts, effects, max_nfev=options.max_nfev,
-                                  diff_step=options.diff_step, economy=options.economy)
+                                  diff_step=options.diff_step, economy=options.economy,
+                                  first_round=options.first_round_jacobian)
             f = fits[names]
             if names not in outs:
                 outs[names] = out_of_sample(f)

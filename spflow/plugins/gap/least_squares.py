@@ -11,6 +11,14 @@ the adaptive time stepping makes the simulator's output jitter at tiny perturbat
 one parallel batch by the :class:`~spflow.plugins.gap.prediction.Predictor`; scipy's own finite differences are
 serial. The fit keeps the whitened Jacobian at the optimum for the fingerprint projection and for linearised
 parameter uncertainty.
+
+A multi-start fit runs every start for a third of the budget and continues the best one with the full budget. The
+first round only picks that start, so it may take its Jacobians from Broyden's secant update
+(``first_round="secant"``, :class:`SecantJacobian`: one forward-difference Jacobian at the start, then rank-one
+updates from the residuals the optimiser evaluates anyway, no forward runs) instead of a forward difference at every
+accepted step (``"difference"``). The continued start always uses forward differences, so the reported optimum and
+its Jacobian are forward-difference ones either way; the start that wins the first round, and therefore the local
+optimum reached, can differ (docs/gap.md, Cost).
 """
 
 from __future__ import annotations
@@ -21,13 +29,17 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from spflow.core.errors import SpflowError
+from spflow.core.errors import ParameterError, SpflowError
 
 from .catalogue import CandidateEffect
 from .layout import Layout
 from .prediction import Predictor
 
-__all__ = ["Fit", "fit", "model_point", "WhitenedProblem"]
+__all__ = ["FIRST_ROUND_JACOBIANS", "Fit", "fit", "model_point", "SecantJacobian", "WhitenedProblem"]
+
+#: Jacobians of the first, budgeted round of a multi-start fit: a forward difference at every accepted step, or
+#: Broyden's secant update from one forward difference at the start (module docstring)
+FIRST_ROUND_JACOBIANS = ("difference", "secant")
 
 #: whitened residual assigned to every point when a forward run fails (the optimiser steps back)
 _FAILED = 1.0e3
@@ -120,20 +132,59 @@ def _without_last_jacobian(problem: WhitenedProblem, budget: int):
     return fun, jac
 
 
+class SecantJacobian:
+    """Jacobian callable for ``least_squares``: the forward difference of ``problem`` at the first point it is asked
+    for, then Broyden's ("good") rank-one update at every later point ``z`` from the last one ``z0``,
+
+        J = J0 + (f(z) - f(z0) - J0 s) s^T / (s^T s),   s = z - z0,
+
+    the least change of ``J0`` (Frobenius norm) that satisfies the secant condition ``J s = f(z) - f(z0)``
+    (Broyden 1965; Dennis & Schnabel 1996, Sec. 8.1). scipy's trust-region reflective method asks for the Jacobian
+    only at points whose residuals it has just evaluated, which the predictor has memoised: an update costs no
+    forward run. ``differences`` counts the forward-difference Jacobians taken."""
+
+    def __init__(self, problem: WhitenedProblem):
+        self.problem = problem
+        self.z: np.ndarray | None = None
+        self.f: np.ndarray | None = None
+        self.J: np.ndarray | None = None
+        self.differences = 0
+
+    def __call__(self, z) -> np.ndarray:
+        z = np.asarray(z, float)
+        f = self.problem.fun(z)
+        if self.J is None:
+            self.J, self.differences = self.problem.jac(z, f), self.differences + 1
+        else:
+            s = z - self.z
+            ss = float(s @ s)
+            if ss > 0.0:
+                self.J = self.J + np.outer(f - self.f - self.J @ s, s) / ss
+        self.z, self.f = z, f
+        return self.J.copy()
+
+
 def fit(predictor: Predictor, layout: Layout, starts: Sequence[np.ndarray], candidates=(), *,
-        max_nfev: int = 30, diff_step: float = 0.01, economy: bool = True) -> Fit:
+        max_nfev: int = 30, diff_step: float = 0.01, economy: bool = True, first_round: str = "difference") -> Fit:
     """Least-squares fit from the best of ``starts`` (unit-box vectors of length p + len(candidates)).
 
     With several starts, each first runs a third of the budget; the best one then continues with the full
     ``max_nfev`` (the memoised forward runs make the restart free). ``economy`` skips the forward runs of the
     Jacobians at the end of the first round (:func:`_without_last_jacobian`: same result, fewer runs); ``False``
-    computes them (the behaviour before, for benchmarks)."""
+    computes them (the behaviour before, for benchmarks). ``first_round`` (one of :data:`FIRST_ROUND_JACOBIANS`):
+    the Jacobians of that first round, forward differences or Broyden's secant update (:class:`SecantJacobian`; the
+    continued start uses forward differences either way)."""
+    if first_round not in FIRST_ROUND_JACOBIANS:
+        raise ParameterError(f"first_round = {first_round!r} is not allowed; allowed {list(FIRST_ROUND_JACOBIANS)} "
+                             "(the Jacobians of a multi-start fit's first round)")
     n_params = len(predictor.base.parameters)
     problem = WhitenedProblem(predictor, layout, candidates, n_params, diff_step)
 
-    def solve(z0, budget, last_jacobian=True):
+    def solve(z0, budget, last_jacobian=True, secant=False):
         fun, jac = problem.fun, problem.jac
-        if not last_jacobian:
+        if secant:  # (its updates cost no forward run, the last one included)
+            jac = SecantJacobian(problem)
+        elif not last_jacobian:
             fun, jac = _without_last_jacobian(problem, budget)
         return least_squares(fun, z0, jac=jac, bounds=(0.0, 1.0), method="trf", x_scale=1.0,
                              ftol=1e-4, xtol=1e-4, gtol=1e-6, max_nfev=budget)
@@ -145,7 +196,8 @@ def fit(predictor: Predictor, layout: Layout, starts: Sequence[np.ndarray], cand
             raise SpflowError(f"start has {z0.size} coordinates, expected {n_params + len(problem.candidates)}")
         if np.all(problem.fun(z0) == _FAILED):
             continue
-        res = solve(z0, max(2, max_nfev // 3), not economy) if len(starts) > 1 else solve(z0, max_nfev)
+        res = (solve(z0, max(2, max_nfev // 3), not economy, first_round == "secant") if len(starts) > 1
+               else solve(z0, max_nfev))
         if best is None or res.cost < best.cost:
             best, best_start = res, z0
     if best is None:

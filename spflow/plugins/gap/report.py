@@ -372,6 +372,7 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         "pv_step": g.options.pv_step,
         "noise_from_data": json.dumps({e.name: e.noise_from_data for e in experiments}),
         "forward_runs": g.forward_runs,
+        "first_round_jacobian": g.options.first_round_jacobian,
         "rule": json.dumps(dataclasses.asdict(g.options.rule)),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)

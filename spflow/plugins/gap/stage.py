@@ -76,6 +76,10 @@ OPTION_PARAMS = {
     "discrepancy_degree": Param(int, 2, bounds=(0, 6),
                                 doc="degree of the per-slug Legendre discrepancy competitor"),
     "max_nfev": Param(int, 30, bounds=(2, 1000), doc="least-squares iterations per fit"),
+    "first_round_jacobian": Param(str, "difference", choices=["difference", "secant"],
+                                  doc="Jacobians of the first round of a multi-start fit (refits): a forward "
+                                      "difference at every step, or Broyden updates from one forward difference "
+                                      "per start (0.4-0.55 of the forward runs; changes results)"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
     "nuisance_scale": Param(float, 0.5, bounds=(1e-3, 1e3),
                             doc="prior scale of calibrated-parameter shifts in the unit box (projection, Laplace)"),
