@@ -12,9 +12,11 @@ Issue #24. Sparse PCE (the default ``--methods``): spflow's default sparse PCE (
 * chaospy ordinary least squares (``fit_regression``) at a degree fixed before seeing the data: the largest total
   degree whose full basis has at most N/2 terms (two runs per coefficient).
 
-Kriging (``--methods spflow_gp,spflow_gp_matern,spflow_pck,sklearn_gp_rbf,sklearn_gp_matern``): spflow's ``GP``
-(Gaussian or Matérn 5/2 kernel) and ``PCK`` from :mod:`spflow.surrogates` with their defaults, against
-scikit-learn's ``GaussianProcessRegressor`` (see :func:`fit_sklearn_gp`). One model per output column throughout.
+Kriging (``--methods spflow_gp,spflow_gp_matern,spflow_pck,spflow_pck_mean,sklearn_gp_rbf,sklearn_gp_matern``):
+spflow's ``GP`` (Gaussian or Matérn 5/2 kernel) and ``PCK`` from :mod:`spflow.surrogates` with their defaults
+(``spflow_pck_mean`` is the same PC-Kriging fit scored by the Sobol indices of its whole predictor instead of its
+trend's), against scikit-learn's ``GaussianProcessRegressor`` (see :func:`fit_sklearn_gp`). One model per output
+column throughout.
 
 Problems, inputs uniform: Ishigami (a = 7, b = 0.1, X ~ U(-π, π)^3); the Sobol G-function with d = 8 and
 a = (0, 1, 4.5, 9, 99, 99, 99, 99) on [0, 1]^8; Borehole on the uniform box of Surjanovic & Bingham's library
@@ -37,10 +39,26 @@ Columns (medians over the output columns of a fit, then over the seeds):
   selected basis (the smallest entry of ``getErrorHistory``); chaospy: the plain LOO of the OLS fit from its hat matrix
   (chaospy has no error estimate; computed here); scikit-learn: the closed-form LOO of the fitted GP (computed here);
 * ``fit CPU``: process CPU time of the fit of all columns, seconds (the peers' own threads included);
+* ``predict CPU``: process CPU time of the prediction of all columns at the validation points (10^4; simulator 10^3),
+  mean only where the API allows it (spflow ``predict_mean``/``predict(X)``, scikit-learn ``predict(X)``; a PCE has
+  no pointwise variance to skip), seconds, the smallest of ``PREDICT_REPEATS`` = 3 calls;
+* ``S1 max err``, ``ST max err``: max over the inputs of |S_i - S_i,ref| (first order) and of |S_Ti - S_Ti,ref|
+  (total). The method's own indices: spflow's PCE its coefficients' (``PCE.sobol()``), OpenTURNS
+  ``FunctionalChaosSobolIndices`` of its result, chaospy the coefficient formula on its orthonormal basis,
+  ``spflow_pck`` its trend's (``PCK.sobol_indices()``, the library's answer). The Kriging predictors (spflow GP,
+  ``spflow_pck_mean``, scikit-learn) have none in closed form: a pick-freeze estimate on the predictor mean
+  (``saltelli_design.py``: Saltelli et al. 2010's first-order and Jansen's total estimator) on one fixed scrambled
+  Sobol' design of ``MC_BASE`` base points, the same for every Kriging method; the script prints that estimator's own
+  error on the true function (~1e-4 on the analytic problems). References, independent of the methods: Ishigami and
+  the G-function in closed form (``analytic_functions.CLOSED_FORM_SOBOL``: Ishigami & Homma 1990, Sobol' 1990,
+  Saltelli et al. 2010; tested against Monte Carlo); Borehole and the simulator the mean of independent scrambled-
+  Sobol' pick-freeze estimates on the true function (``REFERENCE_DESIGN``: Borehole 8 x 2^16 base points, the
+  simulator 4 x 256, i.e. 11 264 runs, ~80 s of CPU once, cached), with their standard error printed;
 * ``p``: the median selected (spflow) or fixed (peers) total degree of a PCE ("-" for Kriging).
 
-Not covered (later parts of #24): Sobol-index errors and prediction times, non-uniform inputs, SMT's Kriging. Run with
-``nice -n 10``; the analytic PCE table takes a few minutes of CPU, the simulator's ~8 min (runs ~35 s of it).
+Not covered (later parts of #24): non-uniform inputs, SMT's Kriging; the pick-freeze estimator's own error on the
+simulator (it would take (d + 2) 2^13 runs). Run with ``nice -n 10``; the analytic PCE table takes a few minutes of
+CPU, the simulator's ~8 min (runs ~35 s of it) plus the one-off reference runs.
 ``--methods spflow`` times spflow alone (e.g. with another checkout first on PYTHONPATH, for a before/after table).
 """
 
@@ -80,6 +98,7 @@ MC_SEED = 7
 #: (base points, independent scramblings) of the reference indices of the problems without a closed form
 REFERENCE_DESIGN = {"borehole": (2**16, 8), "simulator": (256, 4)}
 REFERENCE_SEED = 1000
+PREDICT_REPEATS = 3  # prediction CPU: the smallest of this many calls
 CHUNK = 20_000  # points per predictor call on the pick-freeze design (bounds the Kriging cross-covariance's memory)
 
 
@@ -97,11 +116,15 @@ class Result(NamedTuple):
     total: np.ndarray
 
 
-def timed(predict, points: np.ndarray) -> tuple[np.ndarray, float]:
-    """(predict(points), its process CPU time in s)."""
-    start = time.process_time()
-    values = predict(points)
-    return values, time.process_time() - start
+def timed(predict, points: np.ndarray, repeats: int = PREDICT_REPEATS) -> tuple[np.ndarray, float]:
+    """(predict(points), its process CPU time in s: the smallest of ``repeats`` calls, as ``timeit`` does; on a shared
+    machine single calls of a few ms scatter several-fold)."""
+    cpu = math.inf
+    for _ in range(repeats):
+        start = time.process_time()
+        values = predict(points)
+        cpu = min(cpu, time.process_time() - start)
+    return values, cpu
 
 
 def in_chunks(predict, points: np.ndarray) -> np.ndarray:
