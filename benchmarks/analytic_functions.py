@@ -50,7 +50,7 @@ def ishigami_sobol(a: float = 7.0, b: float = 0.1) -> tuple[np.ndarray, np.ndarr
 
 def g_function_sobol(a: np.ndarray = G_A) -> tuple[np.ndarray, np.ndarray]:
     """Closed-form (first-order, total) Sobol indices of the G-function on U(0, 1)^d (Sobol' 1990; Saltelli et al.
-    2010, Eq. 30): V_i = 1 / (3 (1 + a_i)^2), V = Π (1 + V_i) - 1, S_i = V_i / V, S_Ti = V_i Π_{j≠i} (1 + V_j) / V."""
+    2010): V_i = 1 / (3 (1 + a_i)^2), V = Π (1 + V_i) - 1, S_i = V_i / V, S_Ti = V_i Π_{j≠i} (1 + V_j) / V."""
     v = 1.0 / (3.0 * (1.0 + np.asarray(a, dtype=float)) ** 2)
     variance = np.prod(1.0 + v) - 1.0
     return v / variance, v * np.prod(1.0 + v) / (1.0 + v) / variance

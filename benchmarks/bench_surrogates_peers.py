@@ -49,11 +49,12 @@ Columns (medians over the output columns of a fit, then over the seeds):
   ``spflow_pck_mean``, scikit-learn) have none in closed form: a pick-freeze estimate on the predictor mean
   (``saltelli_design.py``: Saltelli et al. 2010's first-order and Jansen's total estimator) on one fixed scrambled
   Sobol' design of ``MC_BASE`` base points, the same for every Kriging method; the script prints that estimator's own
-  error on the true function (~1e-4 on the analytic problems). References, independent of the methods: Ishigami and
-  the G-function in closed form (``analytic_functions.CLOSED_FORM_SOBOL``: Ishigami & Homma 1990, Sobol' 1990,
-  Saltelli et al. 2010; tested against Monte Carlo); Borehole and the simulator the mean of independent scrambled-
-  Sobol' pick-freeze estimates on the true function (``REFERENCE_DESIGN``: Borehole 8 x 2^16 base points, the
-  simulator 4 x 256, i.e. 11 264 runs, ~80 s of CPU once, cached), with their standard error printed;
+  error on the true function (6e-6 to 4e-4 on the analytic problems). References, independent of the methods:
+  Ishigami and the G-function in closed form (``analytic_functions.CLOSED_FORM_SOBOL``: Ishigami & Homma 1990,
+  Sobol' 1990, Saltelli et al. 2010; tested against Monte Carlo); Borehole and the simulator the mean of independent
+  scrambled-Sobol' pick-freeze estimates on the true function (``REFERENCE_DESIGN``: Borehole 8 x 2^16 base points,
+  standard error ~2e-5; the simulator 4 x 256, i.e. 11 264 runs, ~80 s of CPU once, cached, standard error ~7e-3,
+  which is the size of most methods' simulator errors from N = 200 on), with their standard error printed;
 * ``p``: the median selected (spflow) or fixed (peers) total degree of a PCE ("-" for Kriging).
 
 Not covered (later parts of #24): non-uniform inputs, SMT's Kriging; the pick-freeze estimator's own error on the
