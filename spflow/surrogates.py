@@ -3,7 +3,7 @@
     >>> from spflow.surrogates import PCE
     >>> model = PCE(bounds=[(100, 200), (0.01, 0.02)]).fit(X, y)   # X (n, 2) in physical units, y (n,) or (n, m)
     >>> mean, std = model.predict(X_new, return_std=True)          # shaped like y
-    >>> model.sobol_indices().total, model.loo_error_
+    >>> model.sobol_indices().total, model.loo_error_           # GP/PCK: Monte Carlo on the predictor, with SEs
     >>> from spflow.surrogates import Beta, LogNormal, Normal
     >>> model = PCE(inputs=[Normal(1.0, 0.2), Beta(2, 3, 0.0, 1.0), LogNormal(0.0, 0.25)]).fit(X, y)  # X from them
 
@@ -43,16 +43,21 @@ from spflow.plugins.surrogates.input_marginals import (Beta, LogNormal, Marginal
                                                      first_outside)
 from spflow.plugins.surrogates.kriging_surrogate import NUGGET, RESTARTS
 from spflow.plugins.surrogates.outputs import OutputIndex
+from spflow.plugins.surrogates.sobol_sampling import N_BASE, REPLICATES, pick_freeze_indices
 
 __all__ = ["PCE", "GP", "PCK", "SobolIndices", "SurrogateRegressor", "Uniform", "Normal", "LogNormal",
            "TruncatedNormal", "Beta"]
 
 
 class SobolIndices(NamedTuple):
-    """First-order and total Sobol indices: shape (d,) for a scalar ``y``, (m, d) for ``y`` of shape (n, m)."""
+    """First-order and total Sobol indices: shape (d,) for a scalar ``y``, (m, d) for ``y`` of shape (n, m). For a
+    Monte Carlo estimate (``GP``, ``PCK`` with ``part="predictor"``) ``first_se`` and ``total_se`` are their standard
+    errors (same shapes); None for indices read off coefficients (exact for the model)."""
 
     first: np.ndarray
     total: np.ndarray
+    first_se: np.ndarray | None = None
+    total_se: np.ndarray | None = None
 
 
 class SurrogateRegressor(RegressorMixin, BaseEstimator):
@@ -183,6 +188,10 @@ class SurrogateRegressor(RegressorMixin, BaseEstimator):
             raise ParameterError(f"{type(self).__name__} is not fitted yet: call fit(X, y) first")
         return self.model_
 
+    def _per_output(self, a: np.ndarray) -> np.ndarray:
+        """Per-input values (m, d) -> (d,) when ``fit`` got a scalar y."""
+        return a[0] if self.scalar_output_ else a
+
     def _shaped(self, a: np.ndarray) -> np.ndarray:
         """(n, m) -> (n,) when ``fit`` got a scalar y; per-output (m,) -> float likewise."""
         if not self.scalar_output_:
@@ -216,8 +225,7 @@ class _TrendSobol:
         """First and total Sobol indices under the input marginals (uniform on ``bounds``, or ``inputs``): (d,) for a
         scalar y, (m, d) otherwise."""
         ds = self._fitted().sobol()
-        first, total = ds["S1"].values, ds["ST"].values  # (m, d)
-        return SobolIndices(first[0], total[0]) if self.scalar_output_ else SobolIndices(first, total)
+        return SobolIndices(*(self._per_output(ds[v].values) for v in ("S1", "ST")))
 
 
 class PCE(_TrendSobol, SurrogateRegressor):
@@ -266,6 +274,14 @@ class _Kriging(SurrogateRegressor):
     def _loo(self) -> np.ndarray:
         return self._fitted().loo
 
+    def _predictor_indices(self, n_base, seed, replicates) -> SobolIndices:
+        """Monte Carlo first-order and total indices of the predictor mean under the input marginals, with their
+        standard errors (:func:`~spflow.plugins.surrogates.sobol_sampling.pick_freeze_indices`)."""
+        model = self._fitted()
+        sampled = pick_freeze_indices(model.predict_mean, model.inputs, n_base=n_base, replicates=replicates,
+                                      seed=seed, what=f"{type(self).__name__}.sobol_indices")
+        return SobolIndices(*(self._per_output(a) for a in sampled))
+
 
 class GP(_Kriging):
     """Gaussian process (ordinary Kriging, thesis §3.8 with a constant trend) on the box ``bounds``, or with the
@@ -276,7 +292,8 @@ class GP(_Kriging):
     scales (Eq. 3.21) from ``restarts`` seeded L-BFGS-B starts, ``nugget`` on the correlation diagonal; for a vector
     ``y``, ``share="output"`` fits one model per column, ``share="variable"`` one set of length scales for all columns
     (each keeps its own mean and variance). ``n_jobs`` spreads the per-column fits. ``predict(X, return_std=True)``
-    gives the Kriging standard deviation; ``loo_error_`` is the Kriging (Dubrule) LOO.
+    gives the Kriging standard deviation; ``loo_error_`` is the Kriging (Dubrule) LOO. ``sobol_indices()``: first
+    and total indices of the predictor mean, estimated by Monte Carlo with their standard errors.
     """
 
     def __init__(self, bounds=None, *, inputs=None, names=None, kernel: str = "gaussian", share: str = "output",
@@ -290,13 +307,27 @@ class GP(_Kriging):
 
         return GPModel.fit(names, lower, upper, outputs, X, y, inputs=inputs, **self._kriging_options())
 
+    def sobol_indices(self, n_base: int = N_BASE, seed: int = 0, replicates: int = REPLICATES) -> SobolIndices:
+        """First-order and total Sobol indices of the predictor mean under the input marginals (uniform on
+        ``bounds``, or ``inputs``): (d,) for a scalar y, (m, d) otherwise.
+
+        A Monte Carlo estimate (a Kriging predictor has no closed-form indices): pick-freeze on ``replicates``
+        (default 4) independent scramblings of a Sobol' design of ``n_base`` (default 8192, a power of 2 >= 64) base
+        points mapped through the marginals' quantile functions, Saltelli et al. (2010)'s first-order and Jansen
+        (1999)'s total estimator (:mod:`~spflow.plugins.surrogates.sobol_sampling`); ``seed`` (default 0) seeds the
+        scramblings. The mean prediction runs at replicates (d + 2) n_base points. ``first_se``/``total_se`` are the
+        standard errors of the returned mean over the replicates."""
+        return self._predictor_indices(n_base, seed, replicates)
+
 
 class PCK(_TrendSobol, _Kriging):
     """PC-Kriging (thesis §3.8, Eq. 3.19): universal Kriging on a sparse-PCE (hybrid LARS) trend, orthonormal under
     the box ``bounds`` (Legendre) or the marginals ``inputs``.
 
     ``degree_max`` and ``q`` bound the trend's PCE, ``mode`` is ``"sequential"`` (the whole LARS-selected trend) or
-    ``"optimal"`` (the LOO-best LARS-ranked prefix); the Kriging options are :class:`GP`'s.
+    ``"optimal"`` (the LOO-best LARS-ranked prefix); the Kriging options are :class:`GP`'s. ``sobol_indices()``: the
+    whole predictor's indices by Monte Carlo (the default), or ``part="trend"`` the trend's, read off its
+    coefficients.
     """
 
     def __init__(self, bounds=None, *, inputs=None, names=None, degree_max: int = 3, q: float = 0.9,
@@ -313,7 +344,20 @@ class PCK(_TrendSobol, _Kriging):
         return PCKModel.fit(names, lower, upper, outputs, X, y, inputs=inputs, degree_max=self.degree_max, q=self.q,
                             mode=self.mode, **self._kriging_options())
 
-    def sobol_indices(self) -> SobolIndices:
-        """First and total Sobol indices of the PC-Kriging *trend* (its GLS coefficients). The Kriging
-        part σ² Z(ξ) is NOT included: these are the model's indices only where the trend carries the response."""
-        return super().sobol_indices()
+    def sobol_indices(self, part: str = "predictor", n_base: int = N_BASE, seed: int = 0,
+                      replicates: int = REPLICATES) -> SobolIndices:
+        """First-order and total Sobol indices under the input marginals (uniform on ``bounds``, or ``inputs``): (d,)
+        for a scalar y, (m, d) otherwise.
+
+        ``part="predictor"`` (the default): the model's own indices, those of its predictor mean (trend plus
+        Gaussian-process part), estimated by Monte Carlo as :meth:`GP.sobol_indices` does (``n_base`` default 8192,
+        ``replicates`` default 4, ``seed`` default 0), with their standard errors ``first_se``/``total_se``.
+        ``part="trend"``: the indices of the trend alone, read off its GLS coefficients on the orthonormal basis
+        (exact for the trend, no standard error; ``n_base``, ``seed``, ``replicates`` unused). The Kriging part
+        σ² Z(ξ) is not in them, so they are the model's indices only where the trend carries the response."""
+        if part not in ("predictor", "trend"):
+            raise ParameterError(f"PCK.sobol_indices: part must be 'predictor' (the whole predictor, Monte Carlo) or "
+                                 f"'trend' (the trend's coefficients), got {part!r}")
+        if part == "trend":
+            return super().sobol_indices()
+        return self._predictor_indices(n_base, seed, replicates)
