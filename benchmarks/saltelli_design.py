@@ -1,5 +1,6 @@
 """Monte Carlo Sobol indices for the surrogate benchmarks: the pick-freeze design and its estimators (a module of the
-benchmark scripts, independent of spflow's own Sobol code).
+benchmark scripts, independent of spflow's own Sobol code -- :mod:`spflow.plugins.surrogates.sobol_sampling` uses
+the same estimators -- so that the references and scores do not rest on the code being scored).
 
 Two base samples A and B (n, d) and, for each input i, the matrix A_B^(i): A with its column i taken from B
 (Saltelli et al. 2010, "Variance based sensitivity analysis of model output", Comput. Phys. Commun. 181, 259-270,
