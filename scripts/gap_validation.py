@@ -180,18 +180,20 @@ def _truth_params(base: BaseModel, truth: dict) -> dict:
     return {**base.forward_params(base.values(truth["u"])), **truth["fixed"]}
 
 
-def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], numerical_error: bool = True) -> dict:
+def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], numerical_error: bool = True,
+             first_round_jacobian: str = "difference") -> dict:
     """Generate one twin, diagnose it blind (likelihood ``variables``; ``numerical_error=False``: without the
-    numerical-error term), and score the diagnosis against the truth."""
+    numerical-error term; ``first_round_jacobian``: ``Options.first_round_jacobian``), and score the diagnosis
+    against the truth."""
     start_cpu, start = time.process_time(), time.perf_counter()
     base, truth, data = twin(spec, cells, seed)
     snrs = _snr(base, truth, data[0], variables)
-    options = Options(variables=variables) if numerical_error else Options(variables=variables,
-                                                                           numerical_variants=())
+    options = Options(variables=variables, first_round_jacobian=first_round_jacobian,
+                      **({} if numerical_error else {"numerical_variants": ()}))
     g = diagnose([data[0]], [data[1]], base, CATALOGUE, options)
     return {
         "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
-        "numerical_error": numerical_error,
+        "numerical_error": numerical_error, "first_round_jacobian": first_round_jacobian,
         "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], **snrs,
         **outcome(g, base, truth, variables),
         "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
@@ -883,6 +885,8 @@ def main(argv=None) -> int:
                         "it (regenerated from their seeds; the file is rewritten once all are done)")
     p.add_argument("--no-numerical-error", action="store_true",
                    help="diagnose without the numerical-error term (Options.numerical_variants = ())")
+    p.add_argument("--first-round-jacobian", choices=("difference", "secant"), default="difference",
+                   help="Options.first_round_jacobian of every diagnosis (docs/gap.md, Cost; default: difference)")
     p.add_argument("--cells", type=int, default=30)
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--seed", type=int, default=20260101)
@@ -906,13 +910,18 @@ def main(argv=None) -> int:
         specs = scenarios(*counts)
         file = results / f"{key}.jsonl"
         done = _records(file, args.cells)
+        mixed = {r.get("first_round_jacobian", "difference") for r in done.values()} - {args.first_round_jacobian}
+        if mixed:
+            raise SystemExit(f"{file} holds twins diagnosed with first_round_jacobian = {sorted(mixed)}; resume them "
+                             f"with that option, or give another --results for {args.first_round_jacobian!r}")
         todo = [(s, args.seed + 1000 * i) for s, i in select(specs, args.only) if s["id"] not in done]
         print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
         from joblib import Parallel, delayed
 
         with file.open("a") as fh:
             for record in Parallel(n_jobs=args.jobs, return_as="generator")(
-                    delayed(run_twin)(s, args.cells, seed, variables, not args.no_numerical_error)
+                    delayed(run_twin)(s, args.cells, seed, variables, not args.no_numerical_error,
+                                      args.first_round_jacobian)
                     for s, seed in todo):
                 fh.write(json.dumps(record) + "\n")
                 fh.flush()
