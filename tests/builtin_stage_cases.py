@@ -108,6 +108,7 @@ CASES = {
     "priors": lambda s: ({"names": ["AP1", "ALPHAL1"]}, {"fit_polymer_rheology": s.run("fit_polymer_rheology"),
                                                         "fit_tracer": s.run("fit_tracer")}, ()),
     "diagnose": lambda s: ({"base": DIAGNOSE_BASE, "max_nfev": 2, "replicates": 10, "numerical_error": False,
-                            "shortlist": 1, "max_effects": 1, "subset_pool": 1}, {}, ()),
+                            "shortlist": 1, "first_step_refits": "shortlist", "max_effects": 1,
+                            "subset_pool": 1}, {}, ()),
     **{name: (lambda s: ({}, {}, ())) for name in LAB_FITS},
 }

@@ -3,6 +3,8 @@
 * :func:`fingerprint_columns` — whitened finite-strength responses of each candidate at a calibrated point
   (one forward run per candidate and test strength), the input of
   :func:`~spflow.plugins.gap.fingerprints.screen`;
+* :func:`screen_order` — every candidate, best screen score first (the first step's refits by default: the screen
+  is linear, and an effect the recalibration bends can rank low although it is the one that fits);
 * :func:`shortlist` — the candidates worth a refit: the ``size`` best positive screen scores, plus every candidate
   whose projected fingerprint is near-collinear (cos >= ``cos_threshold``) with one of them (an a-priori ambiguity
   partner), minus those whose fingerprint re-calibration absorbs almost entirely (indistinguishable from a
@@ -26,7 +28,7 @@ from .layout import Layout
 from .least_squares import Fit, fit
 from .prediction import Predictor
 
-__all__ = ["fingerprint_columns", "shortlist", "refit"]
+__all__ = ["FIRST_STEP_REFITS", "fingerprint_columns", "screen_order", "shortlist", "refit"]
 
 
 def fingerprint_columns(predictor: Predictor, layout: Layout, reference: Fit,
@@ -48,6 +50,16 @@ def fingerprint_columns(predictor: Predictor, layout: Layout, reference: Fit,
             k += 1
         out.append(np.column_stack(cols))
     return out
+
+
+#: ``Options.first_step_refits``: every candidate, or the screen's shortlist
+FIRST_STEP_REFITS = ("all", "shortlist")
+
+
+def screen_order(result: ScreenResult) -> list[int]:
+    """Indices of all candidates, best screen score first (candidates without a score last)."""
+    z = result.best_z()
+    return sorted(range(len(z)), key=lambda i: -np.nan_to_num(z[i], nan=-np.inf))
 
 
 def shortlist(result: ScreenResult, size: int, cos_threshold: float = 0.9, absorbed_max: float = 0.95,

@@ -61,8 +61,11 @@ OPTION_PARAMS = {
                      doc="grid step (a multiple of the transducer interval keeps the AR(1) model exact)"),
     "alpha": Param(float, 0.01, bounds=(1e-6, 0.5), doc="significance level of the calibration-gap test and cells"),
     "shortlist": Param(int, 3, bounds=(1, 20), doc="candidates refitted per step (plus ambiguity partners)"),
-    "expand_shortlist": Param(bool, True, doc="first step: while the gap is significant and no refit passes, refit "
-                                              "the next candidates in screen order (shortlist at a time)"),
+    "first_step_refits": Param(str, "all", choices=["all", "shortlist"],
+                               doc="first step: refit every candidate (screen order), or the screen's shortlist"),
+    "expand_shortlist": Param(bool, True, doc="first step with first_step_refits = shortlist: while the gap is "
+                                              "significant and no refit passes, refit the next candidates in "
+                                              "screen order (shortlist at a time)"),
     "max_effects": Param(int, 2, bounds=(1, 5),
                          doc="effects in the final model at most (greedy and joint search; 3 finds three "
                              "coexisting effects)"),
@@ -116,7 +119,8 @@ def options_from(values: dict) -> Options:
 class Diagnose(Stage):
     name = "diagnose"
     # 7: the targeted gap test and the expanded shortlist (issue 20); every unit in UDUNITS form (issue 23)
-    version = "7"
+    # 8: the first step refits every candidate (first_step_refits = "all", issue 20)
+    version = "8"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
