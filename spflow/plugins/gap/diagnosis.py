@@ -15,9 +15,9 @@
    (:mod:`~spflow.plugins.gap.input_correlation`); the omnibus test of the calibration gap is
    ``P(chi^2_{n-p} >= chi^2) < alpha`` (the targeted one follows the first refits, step 3).
 3. **Which** — projected finite-strength fingerprints of every candidate and their angle matrix
-   (:mod:`~spflow.plugins.gap.fingerprints`), refits of every candidate in the first step (or a shortlist,
-   extended in screen order while the gap is significant and no refit passes) and of a shortlist after it, refits of "reference + effect"
-   (:mod:`~spflow.plugins.gap.candidates`) scored out of sample (held-out experiments, else leave-one-slug-out;
+   (:mod:`~spflow.plugins.gap.fingerprints`), refits of "reference + effect" -- every candidate in the first step
+   (or a shortlist, extended in screen order while the gap is significant and no refit passes), a shortlist after
+   it -- (:mod:`~spflow.plugins.gap.candidates`) scored out of sample (held-out experiments, else leave-one-slug-out;
    :mod:`~spflow.plugins.gap.predictive_scores`; PSIS-LOO on the calibration data is reported next to it,
    :mod:`~spflow.plugins.gap.psis_loo`), the decision rule and greedy addition of further effects
    (:mod:`~spflow.plugins.gap.verdict`; the calibration gap is significant on the omnibus or the targeted test).
