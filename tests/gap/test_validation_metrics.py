@@ -114,3 +114,27 @@ def test_rates_beyond_numerics_count_only_twins_that_record_it():
     assert m["detection_snr3"]["value"] == pytest.approx(1 / 3)
     bins = {tuple(b["snr"]): b["n"] for b in gv.power([strong, within, unknown], "snr_beyond_numerics")}
     assert bins[(1.0, 3.0)] == 1 and bins[(3.0, 10.0)] == 1 and sum(bins.values()) == 2
+
+
+def test_paired_comparison_with_a_baseline_study_by_hand():
+    def twin(i, verdict, ambiguity, seed=1):
+        r = record("single:dispersion", 12.0, verdict, [list(ambiguity)] if ambiguity else [], ambiguity,
+                   {"dispersion": 3.0})
+        return r | {"id": f"single:dispersion#{i}", "seed": seed, "snr_beyond_numerics": 5.0}
+
+    baseline = [twin(0, "effect", ["dispersion"]), twin(1, "effect", ["polymer_adsorption"]),
+                twin(2, "none", []), twin(3, "effect", ["dispersion"]), twin(4, "none", [])]
+    here = [twin(0, "effect", ["dispersion"]),                      # unchanged, truth in the set
+            twin(1, "ambiguous", ["polymer_adsorption", "dispersion"]),  # truth entered the set
+            twin(2, "effect", ["dispersion"]),                      # truth entered the set
+            twin(3, "effect", ["polymer_adsorption"]),              # truth left the set
+            twin(4, "none", [], seed=2),                            # another seed: not the same twin
+            twin(5, "effect", ["dispersion"])]                      # not in the baseline
+    lines, payload = gv._paired_section(here, baseline, "B")
+    assert payload["twins"] == 4
+    assert payload["truth_in_set_gained"] == ["single:dispersion#1", "single:dispersion#2"]
+    assert payload["truth_in_set_lost"] == ["single:dispersion#3"]
+    assert payload["changed"] == ["single:dispersion#1", "single:dispersion#2", "single:dispersion#3"]
+    assert payload["baseline_metrics"]["truth_in_set_snr3"]["value"] == 0.5   # twins 0 and 3 of 4
+    assert payload["metrics"]["truth_in_set_snr3"]["value"] == 0.75           # twins 0, 1 and 2 of 4
+    assert gv._paired_section(here[5:], baseline, "B") == (["No twin in common with the baseline B.", ""], {})
