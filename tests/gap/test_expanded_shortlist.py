@@ -8,6 +8,9 @@ The reference is each twin's own truth, which generated its data."""
 import importlib.util
 from pathlib import Path
 
+import pytest
+
+from spflow.core.errors import ParameterError
 from spflow.plugins.gap.candidates import shortlist
 from spflow.plugins.gap.diagnosis import Options, diagnose
 
@@ -48,8 +51,5 @@ def test_refitting_every_candidate_first_finds_an_effect_the_shortlist_never_fit
 
 
 def test_an_unknown_first_step_rule_is_refused_before_any_work():
-    import pytest
-    from spflow.core.errors import ParameterError
-
     with pytest.raises(ParameterError, match="first_step_refits = 'some'.*allowed"):
         diagnose(["no_such_file.nc"], [], None, options=Options(first_step_refits="some"))
