@@ -13,6 +13,7 @@ import pytest
 from spflow.core.errors import ParameterError
 from spflow.plugins.gap.candidates import shortlist
 from spflow.plugins.gap.diagnosis import Options, diagnose
+from spflow.plugins.gap.report import report_dataset
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "gap_validation.py"
 spec = importlib.util.spec_from_file_location("gap_validation", SCRIPT)
@@ -48,6 +49,7 @@ def test_refitting_every_candidate_first_finds_an_effect_the_shortlist_never_fit
     assert "permeability_reduction" not in screened           # the screen's shortlist would not refit it
     assert set(first.shortlisted) == set(gv.CATALOGUE)         # every candidate was refitted
     assert g.verdict == "effect" and g.accepted[0] == ["permeability_reduction"]
+    assert report_dataset(g).attrs["first_step_refits"] == "all"    # the rule is recorded in the output
 
 
 def test_an_unknown_first_step_rule_is_refused_before_any_work():

@@ -373,6 +373,7 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         "noise_from_data": json.dumps({e.name: e.noise_from_data for e in experiments}),
         "forward_runs": g.forward_runs,
         "first_round_jacobian": g.options.first_round_jacobian,
+        "first_step_refits": g.options.first_step_refits,
         "rule": json.dumps(dataclasses.asdict(g.options.rule)),
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
