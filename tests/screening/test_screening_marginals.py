@@ -4,7 +4,8 @@ hypercube and mapped through each marginal's quantile function.
 References computed here: the Sobol' indices of a linear model y = Σ a_i x_i, S_i = S_i^T = a_i² Var(x_i) /
 Σ_j a_j² Var(x_j), with the variances of the normal, beta and truncated normal laws written out by hand; Morris mu*
 of a linear model from the design itself (|a_i Δx_i| / Delta per one-at-a-time step); the designs of uniform
-marginals against SALib's own box designs, bit for bit; and, on the forward model, a screening stage whose space
+marginals against SALib's own box designs, bit for bit; points on the cube's faces under unbounded and bounded laws
+against scipy's quantiles; and, on the forward model, a screening stage whose space
 records uniform marginals against one that records none, bit for bit.
 """
 
@@ -17,6 +18,7 @@ from spflow.core.stage import StageContext
 from spflow.plugins.design.parameter_space import ParameterSpace
 from spflow.plugins.forward.stage import Forward
 from spflow.plugins.screening.morris import morris_indices, morris_sample
+from spflow.plugins.screening.salib_glue import salib_design
 from spflow.plugins.screening.selected_space import SelectedSpace
 from spflow.plugins.screening.sobol import sobol_indices, sobol_sample
 from spflow.plugins.screening.sobol_screening import SobolScreening
@@ -59,6 +61,21 @@ def test_sobol_indices_of_a_linear_model_under_normal_beta_and_truncated_normal_
     # uniform laws on the supports of x2, x3 would give other indices (so the test sees the marginals)
     boxed = _linear_reference([0.25, 4 / 12, 1 / 12, 16 / 12])
     assert np.abs(out["S1"].values[0] - boxed).max() > 0.2
+
+
+def test_a_design_point_on_a_face_is_finite_under_an_unbounded_law_and_unmoved_under_a_bounded_one():
+    # a sampler whose points lie on the faces 0 and 1 (SALib's scrambled Sobol' points can be exactly 0; Morris levels
+    # are 0 and 1): a normal marginal's quantile is infinite there, a beta's and a uniform's are the support's ends
+    faces = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.25, 0.5, 0.75]])
+    laws = [Normal(1.0, 0.5), Beta(2.0, 5.0, 0.0, 2.0), Uniform(-1.0, 3.0)]
+    x = salib_design(lambda problem: faces.copy(), NAMES[:3], None, None, inputs=laws)
+    edge = 0.5**31  # half a cell of 30-bit Sobol' points
+    np.testing.assert_allclose(x[:2, 0], stats.norm(1.0, 0.5).ppf([edge, 1.0 - edge]), rtol=1e-12)
+    assert np.isfinite(x).all()
+    np.testing.assert_array_equal(x[:2, 1], [0.0, 2.0])
+    np.testing.assert_array_equal(x[:2, 2], [-1.0, 3.0])
+    np.testing.assert_allclose(x[2], [stats.norm(1.0, 0.5).ppf(0.25), stats.beta(2.0, 5.0, scale=2.0).ppf(0.5), 2.0],
+                               rtol=1e-10)
 
 
 def test_uniform_marginals_give_salibs_box_design_bit_for_bit():

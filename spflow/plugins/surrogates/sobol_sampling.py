@@ -3,19 +3,18 @@ sampling (Saltelli et al. 2010, "Variance based sensitivity analysis of model ou
 total sensitivity index", Comput. Phys. Commun. 181, 259-270; Jansen 1999, Comput. Phys. Commun. 117, 35-43).
 
 For a model whose Sobol indices have no closed form -- a Kriging predictor, whose Gaussian-process part is not a
-polynomial of the inputs -- the indices are estimated from f at n (d + 2) points. Two base samples A and B (n, d)
-are the two halves of a scrambled Sobol' sequence on [0, 1]^(2d), mapped column by column through each input's
-quantile function (:func:`.input_marginals.from_unit_hypercube`), so the points are drawn from the marginals
-(uniform, normal, lognormal, beta, truncated normal alike); A_B^(i) is A with its column i taken from B
-(Saltelli et al. 2010, §3). With V the variance of f over the 2n points of A and B:
+polynomial of the inputs -- the indices are estimated from f at n (d + 2) points of a Saltelli design: the screening's
+SALib wrappers (:func:`spflow.plugins.screening.sobol.sobol_sample` with the marginals ``inputs``, so the design is
+drawn from them -- uniform, normal, lognormal, beta, truncated normal alike -- and
+:func:`~spflow.plugins.screening.sobol.sobol_indices`, Saltelli et al. (2010)'s first-order and Jansen's total
+estimator, thesis Eqs. 3.2-3.3). This module adds what a predictor needs on top:
 
-* first order (Saltelli et al. 2010, Table 2 (b)):   S_i  = (1/n) Σ_j f(B)_j (f(A_B^(i))_j − f(A)_j) / V;
-* total (Jansen 1999; Saltelli et al. 2010, Table 2 (f)):  S_Ti = (1/2n) Σ_j (f(A)_j − f(A_B^(i))_j)² / V.
-
-``replicates`` independent scramblings (seeds spawned from ``seed``) give independent estimates; the result is their
-mean and the standard error of that mean, std(ddof = 1)/sqrt(replicates). f is evaluated block by block (n points at a
-time), so a Kriging predictor's cross-covariance stays (n, N). An output whose values do not vary has undefined (NaN)
-indices, as in :mod:`.sobol_from_pce`.
+* ``replicates`` independent scramblings (seeds spawned from ``seed``) give independent estimates; the result is their
+  mean and the standard error of that mean, std(ddof = 1)/sqrt(replicates) (SALib's bootstrap intervals of one design
+  are not used);
+* f is evaluated block by block (n points at a time), so a Kriging predictor's cross-covariance stays (n, N);
+* an output whose values do not vary has undefined (NaN) indices, as in :mod:`.sobol_from_pce` (the screening reports
+  0 for such a QoI).
 """
 
 from __future__ import annotations
@@ -26,8 +25,8 @@ from typing import NamedTuple
 import numpy as np
 
 from spflow.core.errors import ParameterError
-
-from .input_marginals import from_unit_hypercube
+from spflow.plugins.screening.salib_glue import is_constant
+from spflow.plugins.screening.sobol import sobol_indices, sobol_sample
 
 __all__ = ["SampledSobol", "pick_freeze_indices", "N_BASE", "REPLICATES"]
 
@@ -35,9 +34,6 @@ __all__ = ["SampledSobol", "pick_freeze_indices", "N_BASE", "REPLICATES"]
 N_BASE = 8192
 #: Default number of independent scramblings.
 REPLICATES = 4
-#: Bits of scipy's Sobol' points: each is an integer / 2^SOBOL_BITS, shifted here to the centre of its cell so that
-#: no coordinate is 0 or 1 (the quantile function of an unbounded marginal is infinite there).
-SOBOL_BITS = 30
 
 
 class SampledSobol(NamedTuple):
@@ -85,23 +81,16 @@ def _values(func: Callable[[np.ndarray], np.ndarray], x: np.ndarray, what: str) 
 
 
 def _one_replicate(func, inputs, n: int, rng: np.random.Generator, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """(first, total), each (m, d), from one scrambled Sobol' design."""
-    from scipy.stats import qmc
-
+    """(first, total), each (m, d), from one scrambled Saltelli design of ``n`` base points (NaN for an output that
+    does not vary)."""
     d = len(inputs)
-    u = qmc.Sobol(2 * d, scramble=True, bits=SOBOL_BITS, seed=rng).random(n) + 0.5 ** (SOBOL_BITS + 1)
-    a, b = from_unit_hypercube(inputs, u[:, :d]), from_unit_hypercube(inputs, u[:, d:])
-    fa, fb = _values(func, a, what), _values(func, b, what)
-    variance = np.var(np.concatenate([fa, fb]), axis=0)
-    first, total = np.empty((fa.shape[1], d)), np.empty((fa.shape[1], d))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for i in range(d):
-            mixed = a.copy()
-            mixed[:, i] = b[:, i]
-            fab = _values(func, mixed, what)
-            first[:, i] = np.mean(fb * (fab - fa), axis=0) / variance
-            total[:, i] = 0.5 * np.mean((fa - fab) ** 2, axis=0) / variance
-    return first, total
+    names = [f"x{j}" for j in range(d)]
+    # with marginals, the design is drawn on the unit cube and mapped through them: the box arguments are not used
+    x = sobol_sample(names, np.zeros(d), np.ones(d), n, seed=rng, inputs=inputs)
+    y = np.concatenate([_values(func, x[k:k + n], what) for k in range(0, len(x), n)])
+    indices = sobol_indices(y, names, resamples=2, seed=rng)  # its bootstrap is not used (module docstring)
+    undefined = is_constant(y)[:, None]
+    return (np.where(undefined, np.nan, indices["S1"].values), np.where(undefined, np.nan, indices["ST"].values))
 
 
 def pick_freeze_indices(func: Callable[[np.ndarray], np.ndarray], inputs, n_base: int = N_BASE,
