@@ -114,3 +114,22 @@ def test_without_the_numerical_error_the_null_gap_is_real_but_nothing_is_declare
     search = result["search"]
     assert search["chosen"] == [] and search["admissible"] == [] and set(search["pool"]) <= set(CATALOGUE)
     assert 0 < search["forward_runs"] < result["forward_runs"]
+
+
+def test_named_dispersion_comes_with_the_dispersivity_it_stands_for_and_its_two_origins(tmp_path, capsys):
+    # the truth mixes at three times the default dispersivity (ALPHAL1 = 0.01 ft), the base model has none: the
+    # diagnosis names dispersion and says which dispersivity that is and that numerical smearing reads the same
+    files = upwind_files(tmp_path, {"dispersion": 3.0}, seed=9)
+    toml = base_toml().replace("[diagnosis]\n", "[effects]\ndispersion = 0.0\n[diagnosis]\n")
+    (tmp_path / "base.toml").write_text(toml)
+    out = tmp_path / "out"
+    assert main(["diagnose", "--observations", files["PF1"], files["PF2"], "--heldout", files["PF3"],
+                 "--base", str(tmp_path / "base.toml"), "--out", str(out)]) == 0
+    result = json.loads((out / "summary.json").read_text())
+    printed = capsys.readouterr().out
+    assert "dispersion" in [e["name"] for e in result["effects"]], result["verdict"]
+    strength = {e["name"]: e["strength"] for e in result["effects"]}["dispersion"]
+    (note,) = [n for n in result["notes"] if n.startswith("dispersion named")]
+    assert f"a longitudinal dispersivity of {strength * 0.01:.3g} ft" in note  # ALPHAL1's default, 0.01 ft
+    assert "numerical dispersion of the simulator that made the data" in note
+    assert f"note: {note}" in printed

@@ -90,3 +90,9 @@ def test_text_from_the_data_is_escaped_in_the_report(tmp_path):
                              []).read_text()
     assert "<td>base &amp; &lt;b&gt;x&lt;/b&gt;</td>" in page and "<b>x</b>" not in page
     assert "where: dp:&lt;script&gt;:SP" in page and "<script>" not in page
+
+
+def test_the_diagnosis_notes_are_printed_after_the_verdict():
+    result = dict(RESULT, notes=["c_surfactant_out of PF1.nc is all zero: left out", "dispersion named at ..."])
+    lines = [i for i in summary_items(result, 1.0) if isinstance(i, str)]
+    assert lines == ["note: c_surfactant_out of PF1.nc is all zero: left out", "note: dispersion named at ..."]

@@ -35,6 +35,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from spflow.core.errors import ParameterError
+from spflow.plugins.forward.parameters import resolve_params
 
 from .base_calibration import calibrate_base
 from .base_model import BaseModel
@@ -42,6 +43,7 @@ from .candidates import FIRST_STEP_REFITS, fingerprint_columns, refit, screen_or
 from .cost import Cost, CostLedger
 from .catalogue import CandidateEffect, candidates_for
 from .discrepancy import Discrepancy, fit_discrepancy
+from .dispersion_note import dispersion_note
 from .change_points import ChangePoint, change_points
 from .fingerprints import NuisanceProjector, ScreenResult, screen
 from .input_correlation import InputCorrelation, input_correlations
@@ -528,6 +530,11 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     tried = {name: sc.strength for step in reversed(steps) for name, sc in step.scores.items()
              if name not in reference.strengths}
     say(f"verdict: {decided} {ambiguity}")
+    named = {**tried, **reference.strengths} if declared else {}
+    if "dispersion" in named and ("dispersion" in ambiguity or "dispersion" in reference.strengths):
+        alphal1 = resolve_params(base.forward_params(base.values(reference.u)))["ALPHAL1"]
+        notes.append(dispersion_note(named["dispersion"], alphal1))
+        say(notes[-1])
 
     rng = np.random.default_rng(options.seed)
     everything = cal + held

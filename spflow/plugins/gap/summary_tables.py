@@ -39,7 +39,7 @@ def _verdict(result: dict) -> list[str | Table]:
         where = ", ".join(f"{c['variable']}:{c['experiment']}:{c['slug']}" for c in result["gap_cells"][:5])
         items.append(f"the gap is real (chi2 {result['fit']['chi2_base']} on {result['fit']['dof']:g} dof) but not "
                      f"attributable to a catalogued mechanism; where: {where or 'no single cell'}")
-    return items
+    return items + [f"note: {note}" for note in result.get("notes", [])]
 
 
 def _candidates(result: dict) -> Table:
