@@ -6,6 +6,7 @@ polymer adsorption must be found, with the truth's strength. The numerical-error
 is above 0 (the data do not share the base model's numerics)."""
 
 import json
+from dataclasses import replace
 
 import pytest
 
@@ -14,7 +15,8 @@ from spflow.core.stage import StageContext
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.forward.simulate import simulate
-from spflow.plugins.gap.report import summary
+from spflow.plugins.gap.diagnosis import diagnose
+from spflow.plugins.gap.report import report_dataset, summary
 from spflow.plugins.gap.stage import Diagnose
 from spflow.synthetic import NoiseModel, measure
 
@@ -133,3 +135,22 @@ def test_named_dispersion_comes_with_the_dispersivity_it_stands_for_and_its_two_
     assert f"a longitudinal dispersivity of {strength * 0.01:.3g} ft" in note  # ALPHAL1's default, 0.01 ft
     assert "numerical dispersion of the simulator that made the data" in note
     assert f"note: {note}" in printed
+
+
+def test_a_rerun_along_another_optimiser_path_is_the_diagnosis_with_that_difference_step(tmp_path):
+    files = upwind_files(tmp_path, {}, seed=7)
+    stage = Diagnose(calibration=[files["PF1"], files["PF2"]], heldout=[files["PF3"]],
+                     base=dict(BASE, effects={"polymer_adsorption": 0.0}), catalogue=CATALOGUE, path_reruns=1,
+                     **OPTIONS)
+    main_run = stage.diagnosis(StageContext("diagnose", verbose=False))
+    (rerun,) = main_run.path_reruns
+    assert rerun.diff_step == pytest.approx(1.1 * 0.01)  # the default relative difference step, 10 % larger
+    # the same diagnosis run by hand with that difference step
+    by_hand = diagnose([files["PF1"], files["PF2"]], [files["PF3"]], stage.base_model, stage.catalogue,
+                       replace(stage.options, diff_step=rerun.diff_step, path_reruns=0))
+    assert (rerun.verdict, rerun.ambiguity_set, rerun.forward_runs) == (by_hand.verdict, by_hand.ambiguity,
+                                                                        by_hand.forward_runs)
+    assert rerun.effects == by_hand.final_fit.strengths
+    assert rerun.agrees == (by_hand.verdict == main_run.verdict and set(by_hand.ambiguity) == set(main_run.ambiguity)
+                            and set(by_hand.final_fit.strengths) == set(main_run.final_fit.strengths))
+    assert summary(report_dataset(main_run))["path_reruns"] == [rerun.as_dict()]

@@ -63,8 +63,9 @@ def test_without_a_numerical_scale_and_an_unattributed_gap():
     items = summary_items(result, 1.0)
     assert "Numerical error in the error model" not in _tables(result)
     assert "Final model's effects" not in _tables(result)  # no effect declared: no table of them
-    (line,) = [i for i in items if isinstance(i, str)]
+    line, stability = [i for i in items if isinstance(i, str)]
     assert "not attributable to a catalogued mechanism; where: dp:BCF1:SP" in line
+    assert stability == "verdict along other optimiser paths: not checked (path_reruns = 0)"
     assert _tables(result)["Verdict"].rows == [["unattributed", "-", "-", "capillary_pressure"]]
 
 
@@ -95,4 +96,19 @@ def test_text_from_the_data_is_escaped_in_the_report(tmp_path):
 def test_the_diagnosis_notes_are_printed_after_the_verdict():
     result = dict(RESULT, notes=["c_surfactant_out of PF1.nc is all zero: left out", "dispersion named at ..."])
     lines = [i for i in summary_items(result, 1.0) if isinstance(i, str)]
-    assert lines == ["note: c_surfactant_out of PF1.nc is all zero: left out", "note: dispersion named at ..."]
+    assert lines[:2] == ["note: c_surfactant_out of PF1.nc is all zero: left out", "note: dispersion named at ..."]
+
+
+def test_reruns_along_other_optimiser_paths_are_tabled_and_a_changed_verdict_is_called_so():
+    agree = {"diff_step": 0.011, "verdict": "ambiguous", "ambiguity_set": ["dispersion", "capillary_pressure"],
+             "effects": {"capillary_pressure": 0.93}, "forward_runs": 40, "agrees": True}
+    differ = {"diff_step": 0.009, "verdict": "effect", "ambiguity_set": ["capillary_pressure"],
+              "effects": {"capillary_pressure": 0.88}, "forward_runs": 44, "agrees": False}
+    items = summary_items(dict(RESULT, path_reruns=[agree]), 1.0)
+    assert items[-1] == "the verdict holds along 1 of 1 other optimiser paths"
+    items = summary_items(dict(RESULT, path_reruns=[agree, differ]), 1.0)
+    table = items[-2]
+    assert table.rows == [[0.011, "ambiguous", "dispersion, capillary_pressure", "capillary_pressure 0.93", 40, "yes"],
+                          [0.009, "effect", "capillary_pressure", "capillary_pressure 0.88", 44, "no"]]
+    assert items[-1].startswith("the verdict changes along 1 of 2 other optimiser paths")
+    assert "uncertain between ambiguous, effect" in items[-1]

@@ -52,6 +52,7 @@ from .least_squares import FIRST_ROUND_JACOBIANS, Fit, WhitenedProblem, fit
 from .localisation import Cell, cells, gap_cells, ljung_box
 from .numerical_error import DEFAULT_VARIANTS, NumericalSpread, Numerics, inflate, numerical_spread
 from .numerical_scale import NumericalScale, estimate_scale
+from .path_stability import MAX_RERUNS, PathRerun, rerun_paths
 from .observed import MEASURABLE, Experiment, load_experiments
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
@@ -108,6 +109,9 @@ class Options:
     #: (Broyden updates from one forward difference per start: 0.4-0.55 of the forward runs, but it changes
     #: results -- verdicts and ambiguity sets of twins -- so it is opt-in; least_squares.py, docs/gap.md, Cost)
     first_round_jacobian: str = "difference"
+    #: reruns of the whole diagnosis along other optimiser paths (the difference step scaled by 1.1, 0.9, ...), to
+    #: show whether the verdict holds (:mod:`~spflow.plugins.gap.path_stability`); 0: not checked
+    path_reruns: int = 0
 
 
 @dataclass
@@ -187,6 +191,8 @@ class GapDiagnosis:
     #: with an ``unattributed`` verdict, the physical candidates of the first step that close half the calibration
     #: gap without passing out of sample (best held-out score first; verdict.verdict's ``closers``), else empty
     closers: list[str] = field(default_factory=list)
+    #: the reruns along other optimiser paths (``Options.path_reruns``), empty when not checked
+    path_reruns: list[PathRerun] = field(default_factory=list)
 
     @property
     def dof(self) -> int:
@@ -285,6 +291,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     if options.first_step_refits not in FIRST_STEP_REFITS:
         raise ParameterError(f"first_step_refits = {options.first_step_refits!r} is not allowed; allowed "
                              f"{list(FIRST_STEP_REFITS)}")
+    if not 0 <= options.path_reruns <= MAX_RERUNS:
+        raise ParameterError(f"path_reruns = {options.path_reruns!r} is out of range; allowed 0..{MAX_RERUNS} "
+                             "(reruns along other optimiser paths)")
     if options.first_round_jacobian not in FIRST_ROUND_JACOBIANS:
         raise ParameterError(f"first_round_jacobian = {options.first_round_jacobian!r} is not allowed; allowed "
                              f"{list(FIRST_ROUND_JACOBIANS)}")
@@ -543,10 +552,22 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     final_view = base_view if reference is base_fit else _view(reference, predictor, layout_all, everything, options,
                                                                 rng)
     runs = predictor.runs + (numerical.runs if numerical is not None else 0)
+
+    def rerun(step: float) -> tuple[str, list[str], dict[str, float], int]:
+        say(f"rerunning the diagnosis along another optimiser path: difference step {step:g}")
+        g = diagnose(calibration, heldout, base, catalogue, replace(options, diff_step=step, path_reruns=0),
+                     parallel=parallel, parameter_sets=parameter_sets, polish=polish,
+                     log=lambda msg: say(f"[difference step {step:g}] {msg}"))
+        return g.verdict, g.ambiguity, g.final_fit.strengths, g.forward_runs
+
+    reruns = rerun_paths(rerun, options.diff_step, options.path_reruns, decided, ambiguity, reference.strengths)
+    for r in reruns:
+        say(f"difference step {r.diff_step:g}: {r.verdict} {r.ambiguity_set} -- "
+            f"{'agrees' if r.agrees else 'DIFFERS from the main run'}")
     return GapDiagnosis(options, base, cal, held, candidates, layout_fit, layout_score, layout_all, kind, base_fit,
                         pvalue, significant, steps, accepted, decided, ambiguity, reference,
                         _label(reference), w_base, w_ref, base_view, final_view,
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
                         time.perf_counter() - start, runs, chi2_measurement, numerical, scale, disc, w_disc, search,
                         pool, search_runs, tried, notes, ledger.table(), targeted,
-                        closers if decided == "unattributed" else [])
+                        closers if decided == "unattributed" else [], reruns)

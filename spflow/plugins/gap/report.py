@@ -27,7 +27,9 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
   with measurement error only, the estimated scale with its interval and likelihood profile, RMS spread of the
   variants per block, unscaled) and the scale alone as the number ``numerical_scale``, ``discrepancy`` (the
   competitor's terms, calibration chi^2, held-out dELPD over the base), ``search`` (pool, subsets fitted,
-  admissible, chosen, forward runs) and ``notes`` (blocks left out of the report) as JSON.
+  admissible, chosen, forward runs), ``notes`` (blocks left out of the report; the dispersivity a named dispersion
+  stands for) and ``path_reruns`` (the diagnosis rerun along other optimiser paths: difference step, verdict, set,
+  effects, forward runs, whether it agrees; :mod:`~spflow.plugins.gap.path_stability`) as JSON.
 
 :func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
 """
@@ -362,6 +364,7 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         **({} if g.numerical_scale is None else {"numerical_scale": g.numerical_scale.estimate}),
         "discrepancy": json.dumps(discrepancy),
         "notes": json.dumps(g.notes),
+        "path_reruns": json.dumps([r.as_dict() for r in g.path_reruns]),
         "accepted_steps": json.dumps(g.accepted),
         "final_model": g.final_label,
         "score_kind": g.score_kind,
@@ -443,6 +446,7 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
         "numerical_error": json.loads(r.attrs.get("numerical_error", "null")),
         "discrepancy": json.loads(r.attrs.get("discrepancy", "null")),
         "notes": json.loads(r.attrs.get("notes", "[]")),
+        "path_reruns": json.loads(r.attrs.get("path_reruns", "[]")),
         "final_model": r.attrs["final_model"],
         "score": r.attrs["score_kind"],
         "ranked_effects": ranked,

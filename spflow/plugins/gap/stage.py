@@ -84,6 +84,9 @@ OPTION_PARAMS = {
                                       "difference at every step, or Broyden updates from one forward difference "
                                       "per start (0.4-0.55 of the forward runs; changes results)"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
+    "path_reruns": Param(int, 0, bounds=(0, 5),
+                         doc="reruns of the whole diagnosis along other optimiser paths (difference step x1.1, "
+                             "x0.9, ...) to show whether the verdict holds; each costs about one diagnosis"),
     "nuisance_scale": Param(float, 0.5, bounds=(1e-3, 1e3),
                             doc="prior scale of calibrated-parameter shifts in the unit box (projection, Laplace)"),
     "replicates": Param(int, 200, bounds=(10, 100000), doc="replicated data sets of the signature checks"),
@@ -120,7 +123,8 @@ class Diagnose(Stage):
     name = "diagnose"
     # 7: the targeted gap test and the expanded shortlist (issue 20); every unit in UDUNITS form (issue 23)
     # 8: the first step refits every candidate (first_step_refits = "all", issue 20)
-    version = "8"
+    # 9: path_reruns (the verdict along other optimiser paths, off by default; the report records the reruns)
+    version = "9"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})

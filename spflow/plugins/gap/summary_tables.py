@@ -79,9 +79,34 @@ def _numerical_scale(result: dict) -> Table | None:
                        "base model's calibration residuals)")
 
 
+def _path_reruns(result: dict) -> list[str | Table]:
+    """The reruns along other optimiser paths (none: a line saying the verdict's stability was not checked)."""
+    reruns = result.get("path_reruns", [])
+    if not reruns:
+        return ["verdict along other optimiser paths: not checked (path_reruns = 0)"]
+    rows = [[r["diff_step"], r["verdict"], ", ".join(r["ambiguity_set"]) or "-",
+             ", ".join(f"{k} {v:.3g}" for k, v in r["effects"].items()) or "-", r["forward_runs"],
+             "yes" if r["agrees"] else "no"] for r in reruns]
+    table = Table(["difference step", "verdict", "ambiguity set", "declared effects (strength)", "forward runs",
+                   "agrees"], rows, units=["1", "", "", "", "1", ""],
+                  title="Verdict along other optimiser paths (the whole diagnosis rerun with another relative "
+                        "difference step)")
+    agree = sum(r["agrees"] for r in reruns)
+    if agree == len(reruns):
+        line = f"the verdict holds along {agree} of {len(reruns)} other optimiser paths"
+    else:
+        seen = sorted({result["verdict"]} | {r["verdict"] for r in reruns})
+        line = (f"the verdict changes along {len(reruns) - agree} of {len(reruns)} other optimiser paths: it is a "
+                f"finding of the optimiser's path, not of the data; read it as uncertain between {', '.join(seen)} "
+                "and the sets listed")
+    return [table, line]
+
+
 def summary_items(result: dict, seconds: float | None) -> list[str | Table]:
-    """The verdict, the final model's effects, candidate scores, gap closed and numerical-error scale of a diagnosis
-    summary ``result`` (``summary.json``), the diagnosis having taken ``seconds`` (``None``: not recorded): tables,
-    and the line saying where an unattributed gap is."""
+    """The verdict, the final model's effects, candidate scores, gap closed, numerical-error scale and the reruns
+    along other optimiser paths of a diagnosis summary ``result`` (``summary.json``), the diagnosis having taken
+    ``seconds`` (``None``: not recorded): tables, and the lines saying where an unattributed gap is, the
+    diagnosis's notes and whether the verdict holds along other paths."""
     scale = _numerical_scale(result)
-    return [*_verdict(result), _candidates(result), _gap_closed(result, seconds), *([scale] if scale else [])]
+    return [*_verdict(result), _candidates(result), _gap_closed(result, seconds), *([scale] if scale else []),
+            *_path_reruns(result)]
