@@ -231,7 +231,9 @@ def _view(fitted, predictor, layout, experiments, options, rng) -> ModelView:
         pred_sigs[exp.name] = signatures(exp, _series(layout, y, exp))
     cps = change_points(layout, w, e, slug_names, options.alpha, options.min_segment, options.null_draws,
                         options.seed)
-    xcorr = input_correlations(layout, w, experiments, options.alpha, options.max_lag, options.pv_step,
+    params = predictor.base.forward_params(predictor.base.values(fitted.u))
+    qinj = {x.name: resolve_params({**x.core, **params})["QINJ"] for x in experiments}  # as the runs see it
+    xcorr = input_correlations(layout, w, experiments, qinj, options.alpha, options.max_lag, options.pv_step,
                                options.null_draws, options.seed, reuse=options.economy)
     return ModelView(fitted, y, e, w, std, cells(layout, w, e, slug_names), lb, sigs, pred_sigs, cps, xcorr)
 

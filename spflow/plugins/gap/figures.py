@@ -63,7 +63,8 @@ def _row_label(r, m: int, exp: str, qoi: str) -> str:
     if not rows:
         return qoi
     i = min(rows, key=lambda i: (float(r["xcorr_pvalue"][m, i]), -float(r["xcorr_statistic"][m, i])))
-    return f"{qoi}\n~{str(r['xcorr_channel'].values[i]).removesuffix('_ppm')}@{float(r['xcorr_lag'][m, i]):.1f}"
+    channel = str(r["xcorr_channel"].values[i]).removesuffix("_ppm").removesuffix("_ml_min")
+    return f"{qoi}\n~{channel}@{float(r['xcorr_lag'][m, i]):.1f}"
 
 
 def _heatmap(r, path):

@@ -4,12 +4,13 @@ system-identification residual test, Ljung 1999 §16.6; docs/gap.md, Method: **W
 The system-identification test of unmodelled dynamics (Ljung 1999 §16.6; MATLAB ``resid``): residuals that
 correlate with an input at a positive lag point to a mechanism driven by that input -- with salinity steps to
 salinity-dependent viscosity or phase behaviour, with the polymer front to IPV, retention or kinetics, with the
-surfactant slug to surfactant retention or desaturation. The channels are the injected schedule's per-slug
-``salinity_ppm``, ``surfactant_ppm`` and ``polymer_ppm`` at each PV (Table 2.5), lagged by ``0, pv_step, ...,
-max_lag`` PV (before injection started a channel holds its first slug's value). The injection rate is one value
-per coreflood in spflow's schedules (``QINJ``), so it has no within-coreflood variation to correlate with; rate
-effects show between corefloods. A channel that is constant over a block at every lag (e.g. salinity in BCF1) is
-not testable and is left out.
+surfactant slug to surfactant retention or desaturation, with rate steps to a rate-dependent mechanism (shear
+thinning or thickening, rate-dependent trapping: the in-situ rheology floods labs run). The channels are the
+injected schedule's per-slug ``salinity_ppm``, ``surfactant_ppm`` and ``polymer_ppm`` (Table 2.5) and the injection
+rate ``rate_ml_min`` (a slug's own rate, else the run's ``QINJ``, which the caller passes per coreflood) at each PV,
+lagged by ``0, pv_step, ..., max_lag`` PV (before injection started a channel holds its first slug's value). A
+channel that is constant over a block at every lag (e.g. salinity in BCF1, the rate of a coreflood without rate
+steps) is not testable and is left out.
 
 **Statistic.** Per (variable, experiment) block with error model ``W`` (the AR(1) whitening of
 :mod:`~spflow.plugins.gap.error_model`) and whitened residuals ``w = W e``, the residual is regressed on each lagged
@@ -47,23 +48,27 @@ from .observed import Experiment
 
 __all__ = ["CHANNELS", "InputCorrelation", "channel_series", "lagged", "lag_scan", "input_correlations"]
 
-#: input channels of a schedule (slug fields, ppm)
-CHANNELS = ("salinity_ppm", "surfactant_ppm", "polymer_ppm")
+#: input channels of a schedule (slug fields: concentrations in ppm, the injection rate in ml/min)
+CHANNELS = ("salinity_ppm", "surfactant_ppm", "polymer_ppm", "rate_ml_min")
 _RELATIVE_TOL = 1e-9
 
 
-def channel_series(exp: Experiment, channel: str, pv: np.ndarray) -> np.ndarray:
-    """The injected value of ``channel`` (a :class:`~spflow.plugins.forward.schedule.Slug` field, ppm) at
-    injected pore volumes ``pv`` (before 0 PV: the first slug's value)."""
+def channel_series(exp: Experiment, channel: str, pv: np.ndarray, qinj: float) -> np.ndarray:
+    """The injected value of ``channel`` (a :class:`~spflow.plugins.forward.schedule.Slug` field) at injected pore
+    volumes ``pv`` (before 0 PV: the first slug's value); ``qinj`` is the run's QINJ (ml/min), the rate of the slugs
+    that set none."""
     if channel not in CHANNELS:
         raise ParameterError(f"input channel {channel!r} is unknown; allowed {list(CHANNELS)}")
-    values = np.array([getattr(s, channel) for s in exp.schedule.slugs])
+    if channel == "rate_ml_min":
+        values = exp.schedule.rates_ml_min(qinj)
+    else:
+        values = np.array([getattr(s, channel) for s in exp.schedule.slugs])
     return values[exp.slug_index(np.maximum(np.asarray(pv, dtype=float), 0.0))]
 
 
-def lagged(exp: Experiment, channel: str, pv: np.ndarray, lags: np.ndarray) -> np.ndarray:
-    """(n, L) matrix of the channel at ``pv - lag`` for every lag (PV)."""
-    return np.stack([channel_series(exp, channel, np.asarray(pv) - lag) for lag in lags], axis=1)
+def lagged(exp: Experiment, channel: str, pv: np.ndarray, lags: np.ndarray, qinj: float) -> np.ndarray:
+    """(n, L) matrix of the channel at ``pv - lag`` for every lag (PV); ``qinj`` as in :func:`channel_series`."""
+    return np.stack([channel_series(exp, channel, np.asarray(pv) - lag, qinj) for lag in lags], axis=1)
 
 
 @dataclass(frozen=True)
@@ -152,12 +157,13 @@ class InputCorrelation:
         return float(self.beta[self.best] * self.channel_range)
 
 
-def input_correlations(layout: Layout, whitened: np.ndarray, experiments: list[Experiment], alpha: float,
-                       max_lag: float, pv_step: float, draws: int = 20000, seed: int = 0, reuse: bool = True,
-                       ) -> list[InputCorrelation]:
+def input_correlations(layout: Layout, whitened: np.ndarray, experiments: list[Experiment], qinj: dict[str, float],
+                       alpha: float, max_lag: float, pv_step: float, draws: int = 20000, seed: int = 0,
+                       reuse: bool = True) -> list[InputCorrelation]:
     """Lag scans of every testable (block, channel) of ``layout``, flagged at Bonferroni level ``alpha`` over all of
-    them; most significant (then largest statistic) first. ``reuse``: take the null draws of an earlier scan of the
-    same layout (same results, less CPU); ``False`` draws them afresh and keeps nothing."""
+    them; most significant (then largest statistic) first. ``qinj``: each experiment's run QINJ (ml/min), the rate of
+    its slugs that set none. ``reuse``: take the null draws of an earlier scan of the same layout (same results, less
+    CPU); ``False`` draws them afresh and keeps nothing."""
     if not max_lag >= 0.0:
         raise ParameterError(f"max_lag = {max_lag!r} PV is out of range; allowed [0, inf)")
     lags = np.arange(int(np.floor(max_lag / pv_step + 1e-9)) + 1) * pv_step
@@ -165,7 +171,7 @@ def input_correlations(layout: Layout, whitened: np.ndarray, experiments: list[E
     tests = []
     for block, s in zip(layout.blocks, layout.slices()):
         for channel in CHANNELS:
-            x = lagged(by_name[block.experiment], channel, block.pv, lags)
+            x = lagged(by_name[block.experiment], channel, block.pv, lags, qinj[block.experiment])
             r = _regressors(block.noise, x)
             if r is not None:
                 tests.append((block, s, channel, x, r))
