@@ -123,7 +123,8 @@ class Diagnose(Stage):
     name = "diagnose"
     # 7: the targeted gap test and the expanded shortlist (issue 20); every unit in UDUNITS form (issue 23)
     # 8: the first step refits every candidate (first_step_refits = "all", issue 20)
-    # 9: path_reruns (the verdict along other optimiser paths, off by default; the report records the reruns)
+    # 9: path_reruns (the verdict along other optimiser paths, off by default; the report records the reruns); the
+    #    injection rate as an input-correlation channel (rows only for corefloods with rate steps)
     version = "9"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
