@@ -28,6 +28,10 @@ partial study included.
 
     python scripts/independent_world.py --seeds 3 --jobs 2            # the whole study (resumable)
     python scripts/independent_world.py --report-only                 # rebuild the report from the records
+
+``--baseline DIR`` adds a comparison with an earlier study's records (``DIR/records.jsonl``) on the runs both have
+(same source, base variant, case and seed): the metrics of both side by side and every run whose verdict, named
+effects or ambiguity set changed (e.g. a new default of the diagnosis against the records it replaces).
 """
 
 from __future__ import annotations
@@ -191,9 +195,59 @@ def metrics(records: list[dict]) -> dict:
     }
 
 
-def write_report(records: list[dict], out: Path, store: Path) -> None:
+def _key(record: dict) -> tuple:
+    return record["source"], record.get("variant", VARIANTS[0]), record["case"], record["seed"]
+
+
+def baseline_section(records: list[dict], baseline: list[dict], label: str) -> tuple[list[str], dict]:
+    """Markdown lines and JSON payload comparing ``records`` with an earlier study's ``baseline`` on the runs both
+    have (:func:`_key`): the metrics of both per source and base variant, and the runs whose outcome changed."""
+    theirs = {_key(r): r for r in baseline}
+    common = [r for r in records if _key(r) in theirs]
+    lines = [f"## Against the baseline `{label}` ({len(common)} runs both have)", ""]
+    payload = {"baseline": label, "runs": len(common), "metrics": {}, "changed": []}
+    if not common:
+        return lines + ["No run in common.", ""], payload
+    lines += ["| source / base | runs | null false alarms | truth first | truth in set | mean set size | "
+              "all three named |", "|---|---|---|---|---|---|---|"]
+    for source, variant in ((s, v) for s in SOURCES for v in VARIANTS):
+        ours = [r for r in common if r["source"] == source and r.get("variant", VARIANTS[0]) == variant]
+        if not ours:
+            continue
+        a, b = metrics(ours), metrics([theirs[_key(r)] for r in ours])
+        payload["metrics"][f"{source}/{variant}"] = {"study": a, "baseline": b}
+
+        def pair(key, total=None):
+            both = [b[key], a[key]]
+            text = " -> ".join("-" if x is None else f"{x:.2f}" if isinstance(x, float) else str(x) for x in both)
+            return text + (f" of {a[total]}" if total else "")
+
+        lines.append(f"| {source} / {variant} | {len(ours)} | {pair('null_false_alarms', 'null_runs')} | "
+                     f"{pair('truth_first', 'single_runs')} | {pair('truth_in_set', 'single_runs')} | "
+                     f"{pair('mean_set_size')} | {pair('all_three_named', 'triple_runs')} |")
+    changed = [(theirs[_key(r)], r) for r in common
+               if (r["verdict"], r["effects"], sorted(r["ambiguity_set"])) != (
+                   theirs[_key(r)]["verdict"], theirs[_key(r)]["effects"], sorted(theirs[_key(r)]["ambiguity_set"]))]
+    lines += ["", f"Runs whose verdict, named effects or ambiguity set changed: {len(changed)} of {len(common)}", ""]
+    if changed:
+        lines += ["| source / base | case | seed | baseline: verdict, named, set | study: verdict, named, set |",
+                  "|---|---|---|---|---|"]
+
+        def outcome(r):
+            return (f"{r['verdict']}, {', '.join(r['effects']) or '-'}, "
+                    f"{{{', '.join(r['ambiguity_set'])}}}")
+
+        for old, new in changed:
+            lines.append(f"| {new['source']} / {new.get('variant', VARIANTS[0])} | {new['case']} | {new['seed']} | "
+                         f"{outcome(old)} | {outcome(new)} |")
+            payload["changed"].append({"key": list(_key(new)), "baseline": outcome(old), "study": outcome(new)})
+    return lines + [""], payload
+
+
+def write_report(records: list[dict], out: Path, store: Path, baseline: tuple[str, list[dict]] | None = None,
+                 ) -> None:
     """The report ``out`` (markdown) and its ``.json`` twin from all records of ``store`` (a partial study says
-    so)."""
+    so), with a comparison against ``baseline`` (label, records) when given."""
     columns = ["none (correct)", "nothing named", "exactly the truth", "truth + spurious", "part of the truth",
                "wrong mechanism"]
     lines = ["# Independent-world study of the gap diagnosis", "",
@@ -227,11 +281,15 @@ def write_report(records: list[dict], out: Path, store: Path) -> None:
                          f"{', '.join(r['ambiguity_set']) or '-'} | {r['chi2_base']:.0f} / {r['dof']:.0f} | "
                          f"{r['forward_runs']} | {r['diagnosis_s']:.0f} |")
         lines.append("")
+    extra = {}
+    if baseline is not None:
+        section, extra["against_baseline"] = baseline_section(records, baseline[1], baseline[0])
+        lines += section
     out.write_text("\n".join(lines))
     out.with_suffix(".json").write_text(json.dumps(
         {"records": records, "metrics": {f"{s}/{v}": metrics([r for r in records if r["source"] == s
                                                               and r.get("variant", VARIANTS[0]) == v])
-                                         for s in SOURCES for v in VARIANTS}},
+                                         for s in SOURCES for v in VARIANTS}} | extra,
         indent=1))
 
 
@@ -253,6 +311,8 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--results", default=str(ROOT / "out" / "independent_world"))
     parser.add_argument("--report-only", action="store_true")
+    parser.add_argument("--baseline", metavar="DIR",
+                        help="an earlier study's results directory: compare with its records on the runs both have")
     parser.add_argument("--out", default=str(ROOT / "docs" / "independent_world.md"),
                         help="the report (markdown; its .json next to it)")
     args = parser.parse_args(argv)
@@ -260,6 +320,12 @@ def main(argv=None) -> int:
     results.mkdir(parents=True, exist_ok=True)
     store = results / "records.jsonl"
     records = [json.loads(line) for line in store.read_text().splitlines()] if store.is_file() else []
+    baseline = None
+    if args.baseline is not None:
+        file = Path(args.baseline) / "records.jsonl"
+        if not file.is_file():
+            raise SystemExit(f"--baseline {args.baseline}: no records.jsonl there")
+        baseline = (_shown(Path(args.baseline)), [json.loads(line) for line in file.read_text().splitlines()])
     if not args.report_only:
         done = {(r["source"], r.get("variant", VARIANTS[0]), r["case"], r["seed"]) for r in records}
         sources = [s for s in args.sources if s != "opm" or shutil.which("flow")]
@@ -275,8 +341,8 @@ def main(argv=None) -> int:
                 fh.write(json.dumps(record) + "\n")
             print(f"{source} {variant} {case} seed {seed}: {record['verdict']} {record['effects']} "
                   f"set {record['ambiguity_set']} ({record['wall_s']:.0f} s)", flush=True)
-            write_report(records, Path(args.out), store)
-    write_report(records, Path(args.out), store)
+            write_report(records, Path(args.out), store, baseline)
+    write_report(records, Path(args.out), store, baseline)
     print(f"report: {args.out} ({len(records)} runs)")
     return 0
 
