@@ -56,7 +56,7 @@ def rerun_paths(rerun: Callable[[float], tuple[str, list[str], dict[str, float],
     ``verdict``, ``ambiguity`` and ``effects`` (names; strengths are reported, not compared)."""
     out = []
     for factor in step_factors(count):
-        step = diff_step * factor
+        step = float(f"{diff_step * factor:.12g}")  # 0.011, not 0.011000000000000001
         v, s, e, runs = rerun(step)
         out.append(PathRerun(step, v, list(s), dict(e), runs,
                              v == verdict and set(s) == set(ambiguity) and set(e) == set(effects)))
