@@ -196,6 +196,7 @@ def metrics(records: list[dict]) -> dict:
 
 
 def _key(record: dict) -> tuple:
+    """What identifies a run: source, base variant, case and seed (records of the first study carry no variant)."""
     return record["source"], record.get("variant", VARIANTS[0]), record["case"], record["seed"]
 
 
@@ -327,7 +328,7 @@ def main(argv=None) -> int:
             raise SystemExit(f"--baseline {args.baseline}: no records.jsonl there")
         baseline = (_shown(Path(args.baseline)), [json.loads(line) for line in file.read_text().splitlines()])
     if not args.report_only:
-        done = {(r["source"], r.get("variant", VARIANTS[0]), r["case"], r["seed"]) for r in records}
+        done = {_key(r) for r in records}
         sources = [s for s in args.sources if s != "opm" or shutil.which("flow")]
         if len(sources) < len(args.sources):
             print("OPM Flow ('flow') is not on PATH: the opm source is skipped (apt-get install libopm-simulators-bin)")
