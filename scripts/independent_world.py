@@ -200,6 +200,12 @@ def _key(record: dict) -> tuple:
     return record["source"], record.get("variant", VARIANTS[0]), record["case"], record["seed"]
 
 
+def _outcome(record: dict) -> str:
+    """What a run concluded: verdict, named effects and ambiguity set (set order does not count)."""
+    return (f"{record['verdict']}, {', '.join(record['effects']) or '-'}, "
+            f"{{{', '.join(sorted(record['ambiguity_set']))}}}")
+
+
 def baseline_section(records: list[dict], baseline: list[dict], label: str) -> tuple[list[str], dict]:
     """Markdown lines and JSON payload comparing ``records`` with an earlier study's ``baseline`` on the runs both
     have (:func:`_key`): the metrics of both per source and base variant, and the runs whose outcome changed."""
@@ -226,22 +232,15 @@ def baseline_section(records: list[dict], baseline: list[dict], label: str) -> t
         lines.append(f"| {source} / {variant} | {len(ours)} | {pair('null_false_alarms', 'null_runs')} | "
                      f"{pair('truth_first', 'single_runs')} | {pair('truth_in_set', 'single_runs')} | "
                      f"{pair('mean_set_size')} | {pair('all_three_named', 'triple_runs')} |")
-    changed = [(theirs[_key(r)], r) for r in common
-               if (r["verdict"], r["effects"], sorted(r["ambiguity_set"])) != (
-                   theirs[_key(r)]["verdict"], theirs[_key(r)]["effects"], sorted(theirs[_key(r)]["ambiguity_set"]))]
+    changed = [(theirs[_key(r)], r) for r in common if _outcome(theirs[_key(r)]) != _outcome(r)]
     lines += ["", f"Runs whose verdict, named effects or ambiguity set changed: {len(changed)} of {len(common)}", ""]
     if changed:
         lines += ["| source / base | case | seed | baseline: verdict, named, set | study: verdict, named, set |",
                   "|---|---|---|---|---|"]
-
-        def outcome(r):
-            return (f"{r['verdict']}, {', '.join(r['effects']) or '-'}, "
-                    f"{{{', '.join(r['ambiguity_set'])}}}")
-
-        for old, new in changed:
-            lines.append(f"| {new['source']} / {new.get('variant', VARIANTS[0])} | {new['case']} | {new['seed']} | "
-                         f"{outcome(old)} | {outcome(new)} |")
-            payload["changed"].append({"key": list(_key(new)), "baseline": outcome(old), "study": outcome(new)})
+    for old, new in changed:
+        lines.append(f"| {new['source']} / {new.get('variant', VARIANTS[0])} | {new['case']} | {new['seed']} | "
+                     f"{_outcome(old)} | {_outcome(new)} |")
+        payload["changed"].append({"key": list(_key(new)), "baseline": _outcome(old), "study": _outcome(new)})
     return lines + [""], payload
 
 

@@ -231,7 +231,7 @@ def _view(fitted, predictor, layout, experiments, options, rng) -> ModelView:
         pred_sigs[exp.name] = signatures(exp, _series(layout, y, exp))
     cps = change_points(layout, w, e, slug_names, options.alpha, options.min_segment, options.null_draws,
                         options.seed)
-    params = predictor.base.forward_params(predictor.base.values(fitted.u))
+    params, _ = predictor.model(fitted.u)
     qinj = {x.name: resolve_params({**x.core, **params})["QINJ"] for x in experiments}  # as the runs see it
     xcorr = input_correlations(layout, w, experiments, qinj, options.alpha, options.max_lag, options.pv_step,
                                options.null_draws, options.seed, reuse=options.economy)
@@ -541,10 +541,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     tried = {name: sc.strength for step in reversed(steps) for name, sc in step.scores.items()
              if name not in reference.strengths}
     say(f"verdict: {decided} {ambiguity}")
-    named = {**tried, **reference.strengths} if declared else {}
-    if "dispersion" in named and ("dispersion" in ambiguity or "dispersion" in reference.strengths):
-        alphal1 = resolve_params(base.forward_params(base.values(reference.u)))["ALPHAL1"]
-        notes.append(dispersion_note(named["dispersion"], alphal1))
+    if "dispersion" in {*ambiguity, *reference.strengths}:  # named: declared, or in the set (then refitted: tried)
+        strength = reference.strengths.get("dispersion", tried.get("dispersion"))
+        notes.append(dispersion_note(strength, resolve_params(predictor.model(reference.u)[0])["ALPHAL1"]))
         say(notes[-1])
 
     rng = np.random.default_rng(options.seed)
