@@ -61,15 +61,15 @@ def _tube_average(ds: xr.Dataset, name: str, grid: np.ndarray, step: float) -> n
     start, end = ds["pv_tube_start"].values, ds["pv_tube_end"].values
     values = ds[name].values
     out = np.full(grid.size, np.nan)
-    for k, pv in enumerate(grid):
-        lo = max(pv - step, 0.0)
-        if pv <= 0.0 or lo < start[0] - 1e-9 or pv > end[-1] + 1e-9:
-            continue
-        overlap = np.clip(np.minimum(end, pv) - np.maximum(start, lo), 0.0, None)
-        used = overlap > 1e-12
-        if np.isnan(values[used]).any():
-            continue
-        out[k] = float(np.sum(values[used] * overlap[used]) / np.sum(overlap[used]))
+    lo = np.maximum(grid - step, 0.0)
+    covered = (grid > 0.0) & (lo >= start[0] - 1e-9) & (grid <= end[-1] + 1e-9)
+    # overlap of every covered window with every tube, one row per window (elementwise, as a loop would compute it)
+    overlap = np.clip(np.minimum(end, grid[covered, None]) - np.maximum(start, lo[covered, None]), 0.0, None)
+    used = overlap > 1e-12
+    complete = ~(used & np.isnan(values)).any(axis=1)
+    for k, row, mask in zip(np.flatnonzero(covered)[complete], overlap[complete], used[complete]):
+        # each window's sums over its own tubes only, in tube order (bit for bit the per-window sums)
+        out[k] = float((values[mask] * row[mask]).sum() / row[mask].sum())
     return out
 
 

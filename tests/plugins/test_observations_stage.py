@@ -93,3 +93,29 @@ def test_dead_volume_is_taken_out_of_the_effluent_series(tmp_path):
 def test_bad_experiment_is_named_before_work(tmp_path):
     with pytest.raises(ParameterError, match="nope.nc"):
         Observations(experiments=[str(tmp_path / "nope.nc")]).run(StageContext("obs"))
+
+
+def test_tube_averages_over_uneven_tubes_weigh_each_tube_by_its_overlap():
+    """Tubes of uneven widths (one without an assay) averaged over the windows ``(pv - 0.1, pv]`` of the grid: the
+    reference integrates the piecewise-constant tube values over each window in plain Python."""
+    rng = np.random.default_rng(7)
+    widths = rng.uniform(0.01, 0.17, 40)
+    end = 0.02 + np.cumsum(widths)
+    start = end - widths
+    cut = rng.uniform(0.0, 1.0, widths.size)
+    cut[23] = np.nan  # a tube without an assay spoils the windows that touch it
+    ds = build_coreflood(experiment="U1", source="test", pv=np.array([0.0, float(end[-1])]), dp=np.zeros(2),
+                         tube_start=start, tube_end=end, tubes={"oil_cut": cut})
+    grid = np.arange(0, float(end[-1]) + 0.35, 0.1)
+    got = on_simulator_grid(ds, ["oil_cut"], grid, 0.1)["oil_cut"]
+    for k, pv in enumerate(grid):
+        lo = max(pv - 0.1, 0.0)
+        if pv <= 0.0 or lo < start[0] or pv > end[-1]:
+            assert np.isnan(got[k]), k  # not covered by the tubes
+            continue
+        parts = [(min(b, pv) - max(a, lo), c) for a, b, c in zip(start, end, cut) if min(b, pv) > max(a, lo)]
+        if any(np.isnan(c) for _, c in parts):
+            assert np.isnan(got[k]), k
+            continue
+        assert got[k] == pytest.approx(sum(w * c for w, c in parts) / sum(w for w, _ in parts), rel=1e-12), k
+    assert np.isfinite(got).sum() >= 20 and np.isnan(got).sum() >= 4  # both kinds of window occur
