@@ -1,5 +1,5 @@
 """Withheld-effect twin study of the gap diagnosis (docs/gap.md, Withheld-effect twins), run blind, with its metrics
-written to docs/.
+written to a report.
 
 Every twin is a pair of lab-like synthetic corefloods (``spflow.synthetic.make_coreflood``, default
 ``NoiseModel``: AR(1) transducer noise, tube-reading errors, dead volume, zero offset and drift) generated from
@@ -21,8 +21,10 @@ is what is left of the noise-free response after the base model is calibrated to
 the signal that can make a calibration gap at all. The report gives the metrics and the power curve for both.
 
 Results accumulate in JSON-lines files (``out/gap_validation/{dp_oil,effluent}.jsonl``; re-running skips finished
-twins, so a long study can be stopped and resumed); the report (``docs/gap_validation.md`` + ``.json`` and
-``docs/figures/<report name>_power_*.png``) is rebuilt from all results.
+twins, so a long study can be stopped and resumed); the report (``--out``, by default ``report.md`` in the results
+directory, + ``.json`` and ``figures/<report name>_power_*.png`` next to it) is rebuilt from all results. The
+committed studies are ``docs/gap_validation_v*.md``; ``scripts/gap_study_history.py`` tables their headline metrics
+(``docs/gap_validation.md``).
 
 **Second phase: the proposed next experiment** (``--next-experiment``, issue 20). For every finished twin whose
 diagnosis is ambiguous (its final ambiguity set holds two or more candidates, :func:`is_ambiguous`) or unattributed
@@ -929,7 +931,7 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=20260101)
     p.add_argument("--results", default=str(ROOT / "out" / "gap_validation"),
                    help="directory of the JSON-lines files of finished twins (finished twins are skipped)")
-    p.add_argument("--out", default=str(ROOT / "docs" / "gap_validation.md"))
+    p.add_argument("--out", help="the report's Markdown file (default: report.md in --results)")
     args = p.parse_args(argv)
     key = "effluent" if args.effluent else "dp_oil"
     variables = SETS[key][1]
@@ -983,7 +985,7 @@ def main(argv=None) -> int:
             found = _records(Path(args.baseline) / f"{name}.jsonl", args.cells)
             if found:
                 baselines[title] = (f"`{args.baseline}`", list(found.values()))
-    out = Path(args.out)
+    out = Path(args.out) if args.out else results / "report.md"
     write_report({t: r for t, r in sets.items() if r}, out, commands, lifts, baselines)
     print(f"wrote {out} and {out.with_suffix('.json')}")
     return 0
