@@ -23,8 +23,8 @@ dispersivity for every phase over 1e-4..0.05 ft, log scale, as a careful enginee
 dispersion is never zero; dispersion is then not a candidate).
 
 Results accumulate in ``out/independent_world/records.jsonl`` (a re-run skips finished runs, so the study can be
-stopped and resumed); the report (``docs/independent_world.md`` + ``.json``) is rebuilt from every record, a
-partial study included.
+stopped and resumed); the report (``--out``, by default ``report.md`` in the results directory, + ``.json``) is
+rebuilt from every record, a partial study included. The committed studies are ``docs/independent_world*.md``.
 
     python scripts/independent_world.py --seeds 3 --jobs 2            # the whole study (resumable)
     python scripts/independent_world.py --report-only                 # rebuild the report from the records
@@ -313,12 +313,12 @@ def main(argv=None) -> int:
     parser.add_argument("--report-only", action="store_true")
     parser.add_argument("--baseline", metavar="DIR",
                         help="an earlier study's results directory: compare with its records on the runs both have")
-    parser.add_argument("--out", default=str(ROOT / "docs" / "independent_world.md"),
-                        help="the report (markdown; its .json next to it)")
+    parser.add_argument("--out", help="the report (markdown; its .json next to it; default: report.md in --results)")
     args = parser.parse_args(argv)
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     store = results / "records.jsonl"
+    out = Path(args.out) if args.out else results / "report.md"
     records = [json.loads(line) for line in store.read_text().splitlines()] if store.is_file() else []
     baseline = None
     if args.baseline is not None:
@@ -341,9 +341,9 @@ def main(argv=None) -> int:
                 fh.write(json.dumps(record) + "\n")
             print(f"{source} {variant} {case} seed {seed}: {record['verdict']} {record['effects']} "
                   f"set {record['ambiguity_set']} ({record['wall_s']:.0f} s)", flush=True)
-            write_report(records, Path(args.out), store, baseline)
-    write_report(records, Path(args.out), store, baseline)
-    print(f"report: {args.out} ({len(records)} runs)")
+            write_report(records, out, store, baseline)
+    write_report(records, out, store, baseline)
+    print(f"report: {out} ({len(records)} runs)")
     return 0
 
 
