@@ -48,7 +48,12 @@ def history(files: list[Path]) -> list[str]:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for path in files:
         report = json.loads(Path(path).read_text())
-        for section, payload in report["sets"].items():
+        sets = report.get("sets") if isinstance(report, dict) else None
+        if not isinstance(sets, dict) or not all(isinstance(p, dict) and {"metrics", "twins"} <= p.keys()
+                                                 for p in sets.values()):
+            raise SystemExit(f"{path}: not a report of scripts/gap_validation.py (it needs 'sets', each with "
+                             "'metrics' and 'twins')")
+        for section, payload in sets.items():
             metrics = payload["metrics"]
             cpu = metrics.get("cpu_s_per_twin")
             lines.append(_row(Path(path).stem, section, str(len(payload["twins"])), metrics,

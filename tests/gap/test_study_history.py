@@ -5,6 +5,8 @@ import importlib.util
 import json
 from pathlib import Path
 
+import pytest
+
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "gap_study_history.py"
 spec = importlib.util.spec_from_file_location("gap_study_history", SCRIPT)
 history = importlib.util.module_from_spec(spec)
@@ -40,3 +42,10 @@ def test_rows_repeat_each_report_and_its_next_experiment_phase(tmp_path):
     assert rows[2] == ["v2 + next experiment (heldout)", "Δp + oil cut", "2 of 3 re-diagnosed", "0/3",
                        "– / – / –", "– / – / 0.900", "– / – / –", "–", "–"]
     assert len(lines[0].split("|")) == len(lines[1].split("|")) == len(lines[2].split("|"))
+
+
+def test_a_file_that_is_not_a_report_is_refused_by_name(tmp_path):
+    other = tmp_path / "records.json"
+    other.write_text(json.dumps({"records": []}))  # an independent-world report, say
+    with pytest.raises(SystemExit, match="records.json: not a report of scripts/gap_validation.py"):
+        history.history([other])
