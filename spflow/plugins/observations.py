@@ -56,20 +56,27 @@ OBSERVATIONS = DatasetSchema(
 )
 
 
+_OVERLAP_ELEMENTS = 2_000_000
+"""Largest windows x tubes overlap block of `_tube_average` (float64 and bool: about 18 MB)."""
+
+
 def _tube_average(ds: xr.Dataset, name: str, grid: np.ndarray, step: float) -> np.ndarray:
     """Volume average of tube values over ``(pv - step, pv]`` for each grid point (NaN where not covered)."""
     start, end = ds["pv_tube_start"].values, ds["pv_tube_end"].values
     values = ds[name].values
     out = np.full(grid.size, np.nan)
     lo = np.maximum(grid - step, 0.0)
-    covered = (grid > 0.0) & (lo >= start[0] - 1e-9) & (grid <= end[-1] + 1e-9)
-    # overlap of every covered window with every tube, one row per window (elementwise, as a loop would compute it)
-    overlap = np.clip(np.minimum(end, grid[covered, None]) - np.maximum(start, lo[covered, None]), 0.0, None)
-    used = overlap > 1e-12
-    complete = ~(used & np.isnan(values)).any(axis=1)
-    for k, row, mask in zip(np.flatnonzero(covered)[complete], overlap[complete], used[complete]):
-        # each window's sums over its own tubes only, in tube order (bit for bit the per-window sums)
-        out[k] = float((values[mask] * row[mask]).sum() / row[mask].sum())
+    covered = np.flatnonzero((grid > 0.0) & (lo >= start[0] - 1e-9) & (grid <= end[-1] + 1e-9))
+    # windows in blocks, so the windows x tubes overlap matrix stays below _OVERLAP_ELEMENTS whatever the grid
+    rows = max(1, _OVERLAP_ELEMENTS // max(start.size, 1))
+    for block in np.array_split(covered, max(1, -(-covered.size // rows))):
+        # overlap of every window with every tube, one row per window (elementwise, as a loop would compute it)
+        overlap = np.clip(np.minimum(end, grid[block, None]) - np.maximum(start, lo[block, None]), 0.0, None)
+        used = overlap > 1e-12
+        complete = ~(used & np.isnan(values)).any(axis=1)
+        for k, row, mask in zip(block[complete], overlap[complete], used[complete]):
+            # each window's sums over its own tubes only, in tube order (bit for bit the per-window sums)
+            out[k] = float((values[mask] * row[mask]).sum() / row[mask].sum())
     return out
 
 

@@ -7,6 +7,7 @@ import pytest
 from spflow.core.errors import ParameterError
 from spflow.core.stage import StageContext
 from spflow.io.format import build_coreflood, schedule_json
+from spflow.plugins import observations
 from spflow.plugins.observations import Observations, on_simulator_grid
 from spflow.plugins.forward.simulate import simulate
 from spflow.synthetic import NoiseModel, make_coreflood
@@ -95,9 +96,14 @@ def test_bad_experiment_is_named_before_work(tmp_path):
         Observations(experiments=[str(tmp_path / "nope.nc")]).run(StageContext("obs"))
 
 
-def test_tube_averages_over_uneven_tubes_weigh_each_tube_by_its_overlap():
+@pytest.mark.parametrize("block_elements", [None, 1, 3 * 40])
+def test_tube_averages_over_uneven_tubes_weigh_each_tube_by_its_overlap(monkeypatch, block_elements):
     """Tubes of uneven widths (one without an assay) averaged over the windows ``(pv - 0.1, pv]`` of the grid: the
-    reference integrates the piecewise-constant tube values over each window in plain Python."""
+    reference integrates the piecewise-constant tube values over each window in plain Python. Also with the
+    windows x tubes overlap computed a window at a time and three windows at a time (the bound that keeps its
+    memory small on fine grids)."""
+    if block_elements is not None:
+        monkeypatch.setattr(observations, "_OVERLAP_ELEMENTS", block_elements)
     rng = np.random.default_rng(7)
     widths = rng.uniform(0.01, 0.17, 40)
     end = 0.02 + np.cumsum(widths)
