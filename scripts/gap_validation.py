@@ -546,7 +546,8 @@ def lift_metrics(records: list[dict], lifts: list[dict]) -> dict:
       twin's result with the added coreflood (a twin without a proposal keeps its first result);
     * ``predicted``: over the done twins whose truth is one of the proposal's hypotheses, the mean predicted
       decision accuracy of the truth and the realised rate of the diagnosis with the added coreflood answering the
-      truth alone (first accepted set exactly the truth), the event the accuracy predicts.
+      truth alone (first accepted set exactly the truth), the event the accuracy predicts; ``kinds`` the same
+      split by the first phase's verdict.
     """
     phase = [r for r in records if needs_next_experiment(r)]
     by_id = {x["id"]: x for x in lifts}
@@ -574,11 +575,17 @@ def lift_metrics(records: list[dict], lifts: list[dict]) -> dict:
     substituted = [after.get(r["id"], r) for r in records]
     study = {"before": metrics(records), "after": metrics(substituted)}
     out["study"] = {k: {when: study[when][k] for when in study} for k in LIFT_METRICS}
-    hits = [(by_id[r["id"]]["proposal"]["accuracy"][_truth_name(r)], after[r["id"]]["accepted"][:1] ==
-             [[_truth_name(r)]]) for r in single if by_id[r["id"]]["proposal"]
-            and _truth_name(r) in by_id[r["id"]]["proposal"]["accuracy"]]
-    out["predicted"] = {"accuracy_of_truth": _mean(h[0] for h in hits if h[0] is not None),
-                        "realised": _rate(h[1] for h in hits)}
+
+    def predicted(rows):
+        hits = [(by_id[r["id"]]["proposal"]["accuracy"][_truth_name(r)], after[r["id"]]["accepted"][:1] ==
+                 [[_truth_name(r)]]) for r in rows if by_id[r["id"]]["proposal"]
+                and _truth_name(r) in by_id[r["id"]]["proposal"]["accuracy"]]
+        return {"accuracy_of_truth": _mean(h[0] for h in hits if h[0] is not None),
+                "realised": _rate(h[1] for h in hits)}
+
+    out["predicted"] = predicted(single) | {"kinds": {kind: predicted([r for r in single if test(r)]) for kind, test
+                                                      in (("ambiguous", is_ambiguous),
+                                                          ("unattributed", is_unattributed))}}
     return out
 
 
@@ -707,7 +714,11 @@ def _lift_section(records: list[dict], lifts: list[dict], role: str) -> tuple[li
         lines += ["", f"Predicted against realised (twins whose truth is one of the proposal's hypotheses, n = "
                   f"{p['realised'][1]}): mean predicted decision accuracy of the truth "
                   f"{_fmt(p['accuracy_of_truth'][0])}, realised {_fmt(p['realised'][0])} (the diagnosis with "
-                  "the added coreflood answers the truth alone). The prediction scores the new coreflood as "
+                  "the added coreflood answers the truth alone); by the first phase's verdict: "
+                  + "; ".join(f"{kind} {_fmt(q['accuracy_of_truth'][0])} predicted, {_fmt(q['realised'][0])} "
+                              f"realised (n = {q['realised'][1]})" for kind, q in p["kinds"].items()
+                              if q["realised"][1])
+                  + ". The prediction scores the new coreflood as "
                   "held-out data" + ("; here it is calibration data and BCF2 decides." if role == "calibration"
                                      else ", as here (next to BCF2).")
                   , "",

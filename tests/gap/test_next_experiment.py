@@ -31,7 +31,7 @@ from spflow.plugins.gap.next_experiment import (Hypothesis, decision_power, hypo
                                                 rank_designs)
 from spflow.plugins.gap.observed import load_experiments
 from spflow.plugins.gap.prediction import Predictor
-from spflow.plugins.gap.proposal import write_proposal
+from spflow.plugins.gap.proposal import proposal_summary, write_proposal
 from spflow.study import bundled_study_path, load_study
 from spflow.study.proposed_experiment import study_experiment_toml
 from spflow.synthetic import NoiseModel, make_coreflood
@@ -457,6 +457,15 @@ def test_hypotheses_source_names_the_closers_left_out():
     assert hypotheses_source(SimpleNamespace(verdict="ambiguous", closers=[])) == "the diagnosis's final ambiguity set"
 
 
+def test_accuracy_caveat_only_after_an_unattributed_verdict():
+    from types import SimpleNamespace
+
+    from spflow.plugins.gap.next_after_diagnosis import accuracy_caveat
+
+    assert "pin weakly" in accuracy_caveat(SimpleNamespace(verdict="unattributed"))
+    assert accuracy_caveat(SimpleNamespace(verdict="ambiguous")) is None
+
+
 def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
     """An ambiguous verdict between the toy's two hypotheses: the proposal is a rate step (the only design the
     physics lets separate them), written as a schedule file, a rationale and a study experiment that loads."""
@@ -477,6 +486,13 @@ def test_proposal_after_an_ambiguous_diagnosis(toy, tmp_path, monkeypatch):
     assert read_schedule_file(proposal.files["schedule"]) == as_schedule(proposal.summary["schedule"])
     assert any("next experiment" in line and "rate" in line for line in proposal.lines())
     assert "the diagnosis's final ambiguity set" in proposal.lines()[0]
+    assert not any("caution" in line for line in proposal.lines())
+    assert "accuracy_caveat" not in json.loads(proposal.files["rationale"].read_text())["assumptions"]
+    # with a caveat (after an unattributed verdict) the rationale records it and the CLI prints it
+    proposal.table.attrs["accuracy_caveat"] = "far lower"
+    summary = proposal_summary(proposal.table)
+    assert summary["assumptions"]["accuracy_caveat"] == "far lower"
+    assert "  caution: far lower" in nad.NextExperiment(proposal.table, summary, proposal.files).lines()
     assert json.loads(proposal.files["rationale"].read_text())["assumptions"]["hypotheses_source"] == \
         "the diagnosis's final ambiguity set"
     # the predict-role study experiment names the schedule file (its loading: test_proposal_as_a_study_experiment)

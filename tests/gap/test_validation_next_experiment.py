@@ -166,6 +166,12 @@ def test_unattributed_twins_join_the_phase_and_are_counted_apart():
     # predicted against realised now also over perm#0 (its truth is one of the hypotheses): (0.7 + 0.4 + 0.9) / 3
     assert m["predicted"]["accuracy_of_truth"] == pytest.approx((2.0 / 3, 3))
     assert m["predicted"]["realised"] == pytest.approx((2 / 3, 3))
+    # split by the first phase's verdict: perm#0 alone is unattributed (predicted 0.9, answers the truth alone)
+    kinds = m["predicted"]["kinds"]
+    assert kinds["unattributed"]["accuracy_of_truth"] == pytest.approx((0.9, 1))
+    assert kinds["unattributed"]["realised"] == (1.0, 1)
+    assert kinds["ambiguous"]["accuracy_of_truth"] == pytest.approx((0.55, 2))
+    assert kinds["ambiguous"]["realised"] == (0.5, 2)
 
 
 def test_report_section_says_how_many_are_done(tmp_path):

@@ -70,7 +70,7 @@ def proposal_summary(table: xr.Dataset, rank: int = 1, runners_up: int = 4) -> d
             "reference_experiment", "variables", "criterion", "min_delta", "se_factor", "draws", "seed",
             "base_rate_ml_min",
             "base_rate_source", "noise_model_source", "parameter_uncertainty", "truth_data", "dispersion_correction",
-            "method", "hypotheses_source") if key in table.attrs},
+            "method", "hypotheses_source", "accuracy_caveat") if key in table.attrs},
     }
 
 
