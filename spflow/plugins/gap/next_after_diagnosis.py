@@ -100,12 +100,12 @@ def accuracy_caveat(diag: GapDiagnosis) -> str | None:
     """What the predicted accuracies cannot promise for ``diag``'s verdict (recorded in the proposal's assumptions
     and printed), or ``None``. After an ``unattributed`` verdict the calibration data pin the base parameters
     weakly (the refit with the true effect can land elsewhere in a flat valley), and the designer holds each
-    hypothesis at its calibrated parameters: in the twin study the realised accuracy after such verdicts was about
-    half the predicted one, while after ambiguous verdicts the two agreed (docs/gap_validation.md)."""
+    hypothesis at its calibrated parameters: in the twin studies the realised accuracy after such verdicts was about
+    half the predicted one, much further off than after ambiguous verdicts (docs/next_experiment.md)."""
     if diag.verdict != "unattributed":
         return None
     return ("the predicted accuracies hold each model at its calibrated parameters, which the calibration data pin "
-            "weakly after an unattributed verdict; the realised accuracy can be far lower (docs/gap_validation.md)")
+            "weakly after an unattributed verdict; the realised accuracy can be far lower (docs/next_experiment.md)")
 
 
 def propose_next_experiment(diag: GapDiagnosis, directory, *, parallel=None, log=None) -> NextExperiment | None:
