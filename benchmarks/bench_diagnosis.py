@@ -10,7 +10,8 @@ Two cases, each diagnosed in up to three modes in the same process, so the table
 * ``exact`` -- the exact reductions only (``economy=True``, forward-difference Jacobians in the first round of a
   multi-start fit: the default options);
 * ``secant`` -- the exact reductions plus Broyden (secant) Jacobians in the first round of every multi-start fit
-  (``first_round_jacobian="secant"``, an option that changes results: docs/gap.md, Cost).
+  and a forward-difference refit of the declared final model (``first_round_jacobian="secant"``, an option that
+  changes results: docs/gap.md, Cost).
 
 The cases:
 
@@ -23,8 +24,9 @@ The cases:
 Per run it prints the forward runs, their CPU seconds, the diagnosing process's own CPU seconds and the wall
 seconds of every phase of the diagnosis (:mod:`spflow.plugins.gap.cost`), the total wall and CPU seconds (this process plus its joblib workers, read from
 ``/proc``: on a machine shared with other jobs the wall time grows with the load, the CPU time hardly; the load
-average is printed with the table), and the verdict, ambiguity set and fitted strengths of every mode, with the
-largest difference from the first mode run (the script says whether verdict and ambiguity set are the same).
+average is printed with the table), and the verdict, ambiguity set, fitted strengths and final chi2 of every mode,
+with the largest difference from the first mode run (the script says whether verdict and ambiguity set are the
+same).
 """
 
 from __future__ import annotations
@@ -120,7 +122,7 @@ def run(case: str, cells: int, mode: str, parallel) -> dict:
 def _table(rows: list[dict]) -> list[str]:
     """Markdown table: per run, forward runs (and their CPU s per run) of every phase, totals, verdict."""
     phases = [p for p in PHASES if any(p in r["cost"] for r in rows)]
-    head = ["case", "cells", "mode"] + phases + ["runs", "run CPU s", "wall s", "CPU s", "verdict"]
+    head = ["case", "cells", "mode"] + phases + ["runs", "run CPU s", "wall s", "CPU s", "verdict", "final χ²"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         cells = [r["case"], str(r["cells"]), r["mode"]]
@@ -129,7 +131,7 @@ def _table(rows: list[dict]) -> list[str]:
             cells.append("-" if c is None else f"{c.runs} ({c.run_cpu_s / c.runs:.2f} s)" if c.runs
                          else f"0 ({c.own_cpu_s:.0f} s own)")
         cells += [str(r["runs"]), f"{sum(c.run_cpu_s for c in r['cost'].values()):.0f}", f"{r['wall']:.0f}",
-                  f"{r['cpu']:.0f}", f"{r['verdict']} {r['ambiguity']}"]
+                  f"{r['cpu']:.0f}", f"{r['verdict']} {r['ambiguity']}", f"{r['chi2']:.1f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
 
@@ -162,7 +164,8 @@ def main() -> None:
                                f"{c.wall_s:.0f} s wall" for p, c in r["cost"].items())
             print(f"{case} {mode}: {r['runs']} runs, wall {r['wall']:.0f} s, CPU {r['cpu']:.0f} s (parallel "
                   f"efficiency CPU / (jobs x wall) {r['cpu'] / (args.jobs * r['wall']):.2f}); {phases}; "
-                  f"verdict {r['verdict']} {r['ambiguity']}, strengths {r['strengths']}", flush=True)
+                  f"verdict {r['verdict']} {r['ambiguity']}, strengths {r['strengths']}, final chi2 {r['chi2']:.3f}",
+                  flush=True)
     print(f"\nload average {os.getloadavg()[0]:.1f} (2 cores shared with other jobs), jobs {args.jobs}")
     print("\n".join(_table(rows)))
     for case in args.cases.split(","):

@@ -17,7 +17,7 @@ from .prediction import Predictor
 __all__ = ["PHASES", "Cost", "CostLedger"]
 
 #: the phases, in the order a diagnosis first enters them
-PHASES = ("base calibration", "numerical error", "scores", "screening", "refits", "subsets", "views")
+PHASES = ("base calibration", "numerical error", "scores", "screening", "refits", "subsets", "final fit", "views")
 
 
 class Cost(NamedTuple):
