@@ -82,7 +82,8 @@ OPTION_PARAMS = {
     "first_round_jacobian": Param(str, "difference", choices=["difference", "secant"],
                                   doc="Jacobians of the first round of a multi-start fit (refits): a forward "
                                       "difference at every step, or Broyden updates from one forward difference "
-                                      "per start (0.4-0.55 of the forward runs; changes results)"),
+                                      "per start, the declared final model then refitted with forward "
+                                      "differences (0.4-0.45 of the forward runs; changes results)"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
     "path_reruns": Param(int, 0, bounds=(0, 5),
                          doc="reruns of the whole diagnosis along other optimiser paths (difference step x1.1, "
@@ -125,7 +126,8 @@ class Diagnose(Stage):
     # 8: the first step refits every candidate (first_step_refits = "all", issue 20)
     # 9: path_reruns (the verdict along other optimiser paths, off by default; the report records the reruns); the
     #    injection rate as an input-correlation channel (rows only for corefloods with rate steps)
-    version = "9"
+    # 10: with first_round_jacobian = "secant" the declared final model is refitted with forward differences
+    version = "10"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
