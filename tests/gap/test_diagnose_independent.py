@@ -9,6 +9,7 @@ import json
 from dataclasses import replace
 
 import pytest
+import xarray as xr
 
 from spflow.cli import main
 from spflow.core.stage import StageContext
@@ -81,6 +82,13 @@ def test_upwind_null_names_no_mechanism(tmp_path, capsys):
     assert "Numerical error in the error model: scale x the spread" in printed and f"{scale['estimate']:.4g}" in printed
     if result["verdict"] != "none":
         assert "tried, not declared" in printed or not result["tried_not_declared"]
+    # how it ran is recorded: the base config's options over the defaults, and the base model's numerics
+    settings = result["settings"]
+    assert {k: settings["options"][k] for k in OPTIONS} == OPTIONS
+    assert settings["options"]["first_round_jacobian"] == "difference"
+    assert (settings["cells"], settings["scheme"]) == (CELLS, "tvd")
+    with xr.open_dataset(out / "gap_report.nc") as on_disk:   # the same from the report read back
+        assert summary(on_disk)["settings"] == settings
 
 
 def test_upwind_withheld_adsorption_is_found(tmp_path):

@@ -378,6 +378,9 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         "first_round_jacobian": g.options.first_round_jacobian,
         "first_step_refits": g.options.first_step_refits,
         "rule": json.dumps(dataclasses.asdict(g.options.rule)),
+        "options": json.dumps(dataclasses.asdict(g.options)),
+        "scheme": g.base.scheme,
+        "simulator_pv_step": g.base.pv_step,
     }
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
@@ -463,4 +466,9 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
                                      "units": str(r["param_units"].values[i])}
                             for i, p in enumerate(r["param"].values)},
         "forward_runs": int(r.attrs["forward_runs"]),
+        # how the diagnosis ran: every option, and the base model's numerics (absent from reports written before)
+        "settings": {"options": json.loads(r.attrs.get("options", "null")), "cells": int(r.attrs["cells"]),
+                     "scheme": r.attrs.get("scheme"),
+                     "simulator_pv_step": _f(r.attrs["simulator_pv_step"]) if "simulator_pv_step" in r.attrs
+                     else None},
     }

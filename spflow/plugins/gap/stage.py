@@ -126,7 +126,8 @@ class Diagnose(Stage):
     # 8: the first step refits every candidate (first_step_refits = "all", issue 20)
     # 9: path_reruns (the verdict along other optimiser paths, off by default; the report records the reruns); the
     #    injection rate as an input-correlation channel (rows only for corefloods with rate steps)
-    # 10: with first_round_jacobian = "secant" the declared final model is refitted with forward differences
+    # 10: with first_round_jacobian = "secant" the declared final model is refitted with forward differences; the
+    #     report records every option and the base model's scheme and output step (summary.json "settings")
     version = "10"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
