@@ -813,6 +813,7 @@ def _power_figure(pw: list[dict], path: Path) -> None:
     for i, r in enumerate(pw):
         ax.text(i, 1.02, f"n={r['n']}", ha="center", fontsize=8)
     ax.set_xticks(x, labels)
+    ax.set_xlim(-0.6, len(pw) - 0.4)  # (every bin, also one without twins)
     ax.set_ylim(0, 1.12)
     ax.set_xlabel("projected-fingerprint SNR of the withheld effect")
     ax.set_ylabel("rate")
