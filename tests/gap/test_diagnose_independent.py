@@ -87,6 +87,7 @@ def test_upwind_null_names_no_mechanism(tmp_path, capsys):
     assert {k: settings["options"][k] for k in OPTIONS} == OPTIONS
     assert settings["options"]["first_round_jacobian"] == "difference"
     assert (settings["cells"], settings["scheme"]) == (CELLS, "tvd")
+    assert "diagnosis options: " in (out / "report.html").read_text()   # and shown with the run settings
     with xr.open_dataset(out / "gap_report.nc") as on_disk:   # the same from the report read back
         assert summary(on_disk)["settings"] == settings
 

@@ -112,6 +112,7 @@ def main(args: argparse.Namespace) -> int:
     else:
         calibration, heldout = list(args.observations), list(args.heldout)
     stage = Diagnose(calibration=calibration, heldout=heldout, base=config, catalogue=catalogue, **options)
+    settings.append(stage.options.line())
     ctx = StageContext("diagnose", n_jobs=args.jobs)
     start = time.perf_counter()
     diag = stage.diagnosis(ctx)

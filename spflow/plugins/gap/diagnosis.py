@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 from scipy.stats import chi2
@@ -114,6 +114,14 @@ class Options:
     #: reruns of the whole diagnosis along other optimiser paths (the difference step scaled by 1.1, 0.9, ...), to
     #: show whether the verdict holds (:mod:`~spflow.plugins.gap.path_stability`); 0: not checked
     path_reruns: int = 0
+
+    def as_dict(self) -> dict:
+        """Every option as JSON values (the rule and the numerical variants as nested dicts)."""
+        return asdict(self)
+
+    def line(self) -> str:
+        """The options on one line, defaults included (printed and recorded with every diagnosis)."""
+        return "diagnosis options: " + ", ".join(f"{k} = {v!r}" for k, v in self.as_dict().items())
 
 
 @dataclass
@@ -320,6 +328,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     layout_held = make_layout(held, options.variables)
     layout_all = make_layout(cal + held, report_only=[v for v in MEASURABLE if v not in options.variables],
                              dropped=notes)
+    say(options.line())
     for note in notes:
         say(note)
     kind = "heldout" if layout_held.size else "leave_one_slug_out"

@@ -36,7 +36,6 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
 
 from __future__ import annotations
 
-import dataclasses
 import json
 
 import numpy as np
@@ -375,10 +374,7 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         "pv_step": g.options.pv_step,
         "noise_from_data": json.dumps({e.name: e.noise_from_data for e in experiments}),
         "forward_runs": g.forward_runs,
-        "first_round_jacobian": g.options.first_round_jacobian,
-        "first_step_refits": g.options.first_step_refits,
-        "rule": json.dumps(dataclasses.asdict(g.options.rule)),
-        "options": json.dumps(dataclasses.asdict(g.options)),
+        "options": json.dumps(g.options.as_dict()),   # every option as it ran, the decision rule included
         "scheme": g.base.scheme,
         "simulator_pv_step": g.base.pv_step,
     }
