@@ -70,7 +70,7 @@ from spflow.plugins.gap.numerical_error import inflate, numerical_spread
 from spflow.plugins.gap.observed import load_experiments
 from spflow.plugins.gap.prediction import Predictor
 from spflow.plugins.gap.report import report_dataset, summary
-from spflow.plugins.gap.verdict import passes
+from spflow.plugins.gap.verdict import Rule, passes
 from spflow.synthetic import NoiseModel, make_coreflood
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -483,6 +483,29 @@ def metrics(records: list[dict]) -> dict:
     return {k: {"value": v[0], "n": v[1]} for k, v in out.items()}
 
 
+def set_misses(records: list[dict], snr: str = "snr_absorbed") -> dict[str, dict[str, int]]:
+    """Why the truth is missing from the ambiguity set: over the single-effect twins with ``snr`` >= 3 whose truth
+    is not in the set, counts by verdict (outer key) and by what the truth's own first-step refit did out of
+    sample (inner key): ``not refitted`` (not shortlisted), ``held-out loss`` (dELPD over the base <= 0: it fits
+    the calibration flood but predicts the held-out one worse), ``gain within the margin`` (0 < dELPD <=
+    ``Rule.se_factor`` measurement SE) or ``gain beyond the margin`` (another test of the rule failed, or a later
+    step took it out)."""
+    margin = Rule().se_factor
+    out: dict[str, dict[str, int]] = {}
+    for r in records:
+        if not r["scenario"].startswith("single:") or not r.get(snr, -1.0) >= 3:
+            continue
+        truth = _truth_name(r)
+        if truth in (r["ambiguity_set"] or []):
+            continue
+        row = next((x for x in r.get("step0") or [] if x["name"] == truth), None)
+        kind = ("not refitted" if row is None else "held-out loss" if not row["delta_elpd"] > 0.0
+                else "gain within the margin" if row["delta_elpd"] <= margin * row["se"] else "gain beyond the margin")
+        out.setdefault(r["verdict"], {}).setdefault(kind, 0)
+        out[r["verdict"]][kind] += 1
+    return out
+
+
 def confusion(records: list[dict]) -> tuple[list[str], list[str], np.ndarray]:
     rows = ["null"] + CATALOGUE + ["pair", "out_of_catalogue"]
     cols = ["none", "out_of_catalogue"] + CATALOGUE
@@ -658,6 +681,16 @@ def _section(records: list[dict], figure: Path, md: Path) -> tuple[list[str], di
         for row in table:
             lines.append(f"| [{row['snr'][0]:g}, {row['snr'][1]:g}) | {row['n']} | {_fmt(row['detection'])} | "
                          f"{_fmt(row['top1'])} |")
+    misses = set_misses(records)
+    payload["set_misses_absorbed"] = misses
+    if misses:
+        kinds = ("not refitted", "held-out loss", "gain within the margin", "gain beyond the margin")
+        lines += ["", "Why the truth is missing from the set (single-effect twins with absorbed SNR ≥ 3; `set_misses`): "
+                  "by verdict, and by what the truth's own first-step refit did on the held-out coreflood.", "",
+                  "| verdict | " + " | ".join(kinds) + " | all |", "|---" * (len(kinds) + 2) + "|"]
+        for verdict, row in sorted(misses.items(), key=lambda kv: -sum(kv[1].values())):
+            lines.append(f"| {verdict} | " + " | ".join(str(row.get(k, "")) for k in kinds)
+                         + f" | {sum(row.values())} |")
     lines += ["", f"![power]({figure.relative_to(md.parent).as_posix()})", "",
               "Confusion matrix. Rows: truth; columns: the first accepted effect (or the first member of an "
               "unconfirmed ambiguity set), `out_of_catalogue`, or `none`.", "",

@@ -138,3 +138,25 @@ def test_paired_comparison_with_a_baseline_study_by_hand():
     assert payload["baseline_metrics"]["truth_in_set_snr3"]["value"] == 0.5   # twins 0 and 3 of 4
     assert payload["metrics"]["truth_in_set_snr3"]["value"] == 0.75           # twins 0, 1 and 2 of 4
     assert gv._paired_section(here[5:], baseline, "B") == (["No twin in common with the baseline B.", ""], {})
+
+
+def test_set_misses_by_hand():
+    """Each miss lands in the class its truth's refit row says; twins with the truth in the set, below SNR 3 or
+    not single-effect are not counted."""
+    def twin(verdict, ambiguity, snr, row):
+        r = record("single:dispersion", 10.0, verdict, ambiguity=ambiguity, truth={"dispersion": 0.4})
+        r["snr_absorbed"] = snr
+        r["step0"] = [] if row is None else [{"name": "dispersion", "delta_elpd": row[0], "se": row[1]}]
+        return r
+
+    records = [twin("unattributed", [], 5.0, (-30.0, 10.0)),      # held-out loss
+               twin("unattributed", [], 5.0, (15.0, 10.0)),       # 15 <= 2 x 10: within the margin
+               twin("unattributed", [], 5.0, (25.0, 10.0)),       # beyond it
+               twin("none", [], 4.0, None),                        # not shortlisted
+               twin("effect", ["dispersion"], 5.0, (50.0, 5.0)),   # truth in the set: not a miss
+               twin("none", [], 2.0, (-5.0, 1.0)),                 # absorbed SNR below 3: not counted
+               record("pair", 10.0, "none", truth={"dispersion": 1.0, "polymer_adsorption": 2.0})]
+    records[-1]["snr_absorbed"] = 10.0
+    assert gv.set_misses(records) == {"unattributed": {"held-out loss": 1, "gain within the margin": 1,
+                                                       "gain beyond the margin": 1},
+                                      "none": {"not refitted": 1}}
