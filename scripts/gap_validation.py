@@ -183,19 +183,21 @@ def _truth_params(base: BaseModel, truth: dict) -> dict:
 
 
 def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], numerical_error: bool = True,
-             first_round_jacobian: str = "difference") -> dict:
+             first_round_jacobian: str = "difference", heldout_predictive: str = "laplace") -> dict:
     """Generate one twin, diagnose it blind (likelihood ``variables``; ``numerical_error=False``: without the
-    numerical-error term; ``first_round_jacobian``: ``Options.first_round_jacobian``), and score the diagnosis
+    numerical-error term; ``first_round_jacobian``, ``heldout_predictive``: those options), and score the diagnosis
     against the truth."""
     start_cpu, start = time.process_time(), time.perf_counter()
     base, truth, data = twin(spec, cells, seed)
     snrs = _snr(base, truth, data[0], variables)
     options = Options(variables=variables, first_round_jacobian=first_round_jacobian,
+                      heldout_predictive=heldout_predictive,
                       **({} if numerical_error else {"numerical_variants": ()}))
     g = diagnose([data[0]], [data[1]], base, CATALOGUE, options)
     return {
         "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
         "numerical_error": numerical_error, "first_round_jacobian": first_round_jacobian,
+        "heldout_predictive": heldout_predictive,
         "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], **snrs,
         **outcome(g, base, truth, variables),
         "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
@@ -968,6 +970,8 @@ def main(argv=None) -> int:
                    help="diagnose without the numerical-error term (Options.numerical_variants = ())")
     p.add_argument("--first-round-jacobian", choices=("difference", "secant"), default="difference",
                    help="Options.first_round_jacobian of every diagnosis (docs/gap.md, Cost; default: difference)")
+    p.add_argument("--heldout-predictive", choices=("laplace", "sampled"), default="laplace",
+                   help="Options.heldout_predictive of every diagnosis (docs/gap.md, Scores; default: laplace)")
     p.add_argument("--baseline", metavar="DIR",
                    help="results directory of an earlier study of the same twins: the report compares the two on "
                         "the twins both have (e.g. a changed default against the records it replaces)")
@@ -994,10 +998,12 @@ def main(argv=None) -> int:
         specs = scenarios(*counts)
         file = results / f"{key}.jsonl"
         done = _records(file, args.cells)
-        mixed = {r.get("first_round_jacobian", "difference") for r in done.values()} - {args.first_round_jacobian}
-        if mixed:
-            raise SystemExit(f"{file} holds twins diagnosed with first_round_jacobian = {sorted(mixed)}; resume them "
-                             f"with that option, or give another --results for {args.first_round_jacobian!r}")
+        for option, default in (("first_round_jacobian", "difference"), ("heldout_predictive", "laplace")):
+            wanted = getattr(args, option)
+            mixed = {r.get(option, default) for r in done.values()} - {wanted}
+            if mixed:
+                raise SystemExit(f"{file} holds twins diagnosed with {option} = {sorted(mixed)}; resume them with "
+                                 f"that option, or give another --results for {wanted!r}")
         todo = [(s, args.seed + 1000 * i) for s, i in select(specs, args.only) if s["id"] not in done]
         print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
         from joblib import Parallel, delayed
@@ -1005,7 +1011,7 @@ def main(argv=None) -> int:
         with file.open("a") as fh:
             for record in Parallel(n_jobs=args.jobs, return_as="generator")(
                     delayed(run_twin)(s, args.cells, seed, variables, not args.no_numerical_error,
-                                      args.first_round_jacobian)
+                                      args.first_round_jacobian, args.heldout_predictive)
                     for s, seed in todo):
                 fh.write(json.dumps(record) + "\n")
                 fh.flush()

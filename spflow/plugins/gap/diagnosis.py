@@ -18,7 +18,8 @@
    (:mod:`~spflow.plugins.gap.fingerprints`), refits of "reference + effect" -- every candidate in the first step
    (or a shortlist, extended in screen order while the gap is significant and no refit passes), a shortlist after
    it -- (:mod:`~spflow.plugins.gap.candidates`) scored out of sample (held-out experiments, else leave-one-slug-out;
-   :mod:`~spflow.plugins.gap.predictive_scores`; PSIS-LOO on the calibration data is reported next to it,
+   :mod:`~spflow.plugins.gap.predictive_scores`, or the sampled posterior predictive of
+   :mod:`~spflow.plugins.gap.sampled_predictive` with ``heldout_predictive = "sampled"``; PSIS-LOO on the calibration data is reported next to it,
    :mod:`~spflow.plugins.gap.psis_loo`), the decision rule and greedy addition of further effects
    (:mod:`~spflow.plugins.gap.verdict`; the calibration gap is significant on the omnibus or the targeted test).
 4. **How far** — gap closed, RMSE ratios, interval coverage and parameter shifts of the final model against the
@@ -57,6 +58,7 @@ from .observed import MEASURABLE, Experiment, load_experiments
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
 from .psis_loo import compare_loo, psis_loo
+from .sampled_predictive import HELDOUT_PREDICTIVES, sampled_predictive
 from .quantification import gap_closed, parameter_covariance, predictive_std, raw_jacobian
 from .signatures import predictive_pvalues, signatures
 from .subsets import SearchResult, SubsetFit, best_subset, subset_key
@@ -114,6 +116,13 @@ class Options:
     #: reruns of the whole diagnosis along other optimiser paths (the difference step scaled by 1.1, 0.9, ...), to
     #: show whether the verdict holds (:mod:`~spflow.plugins.gap.path_stability`); 0: not checked
     path_reruns: int = 0
+    #: the held-out coreflood's predictive distribution under each calibrated model: ``"laplace"`` (linearised at
+    #: the optimum) or ``"sampled"`` (the posterior predictive by importance sampling from ``predictive_draws``
+    #: draws of the Laplace posterior: integrates over the flat valleys the linearisation misjudges; about
+    #: 2 x ``predictive_draws`` forward runs per scored model; needs held-out corefloods; opt-in until a whole twin
+    #: study has judged it, docs/gap.md, Cost)
+    heldout_predictive: str = "laplace"
+    predictive_draws: int = 100
 
     def as_dict(self) -> dict:
         """Every option as JSON values (the rule and the numerical variants as nested dicts)."""
@@ -309,6 +318,15 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     if options.first_round_jacobian not in FIRST_ROUND_JACOBIANS:
         raise ParameterError(f"first_round_jacobian = {options.first_round_jacobian!r} is not allowed; allowed "
                              f"{list(FIRST_ROUND_JACOBIANS)}")
+    if options.heldout_predictive not in HELDOUT_PREDICTIVES:
+        raise ParameterError(f"heldout_predictive = {options.heldout_predictive!r} is not allowed; allowed "
+                             f"{list(HELDOUT_PREDICTIVES)}")
+    if options.heldout_predictive == "sampled" and not heldout:
+        raise ParameterError("heldout_predictive = 'sampled' needs held-out corefloods (heldout is empty); "
+                             "leave-one-slug-out scores use the linearised predictive ('laplace')")
+    if not 20 <= options.predictive_draws <= 10000:
+        raise ParameterError(f"predictive_draws = {options.predictive_draws!r} is out of range; allowed 20..10000 "
+                             "(draws of the sampled held-out predictive)")
     cal = load_experiments(calibration, options.pv_step, base.schedules)
     held = load_experiments(heldout, options.pv_step, base.schedules)
     clash = sorted({e.name for e in cal} & {e.name for e in held})
@@ -362,10 +380,22 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     pvalue = float(chi2.sf(base_fit.chi2, dof))
     say(f"base chi2 = {base_fit.chi2:.1f} on {dof} dof (p = {pvalue:.3g}); {predictor.runs} forward runs")
 
+    def held_out(f: Fit, shift: np.ndarray | None = None) -> Predictive:
+        if options.heldout_predictive == "laplace":
+            return predictive(predictor, layout_held, f, options.nuisance_scale, options.diff_step, shift=shift)
+        problems = [WhitenedProblem(predictor, layout, f.candidates, len(base.parameters), options.diff_step)
+                    for layout in (layout_fit, layout_held)]
+        w = sampled_predictive(problems[0].residuals, problems[1].residuals, f, tau=options.nuisance_scale,
+                               draws=options.predictive_draws, seed=options.seed,
+                               shift=None if shift is None else layout_held.whiten(shift))
+        say(f"sampled held-out predictive of {_label(f)}: effective sample size {w.ess:.1f} of "
+            f"{options.predictive_draws} draws, Pareto k {w.pareto_k:.2f}")
+        return w
+
     def out_of_sample(f: Fit) -> Predictive:
         left = ledger.enter("scores")
         if layout_held.size:
-            w = predictive(predictor, layout_held, f, options.nuisance_scale, options.diff_step)
+            w = held_out(f)
         else:
             w = leave_one_slug_out(predictor, layout_fit, f, tau=options.nuisance_scale, max_nfev=options.loso_nfev,
                                    diff_step=options.diff_step)
@@ -379,8 +409,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     disc = fit_discrepancy(layout_fit, y_base - layout_fit.observed(), slug_names, options.discrepancy_degree)
     w_disc = None
     if layout_held.size:
-        w_disc = predictive(predictor, layout_held, base_fit, options.nuisance_scale, options.diff_step,
-                            shift=disc.shift(layout_held, slug_names))
+        w_disc = held_out(base_fit, disc.shift(layout_held, slug_names))
         say(f"discrepancy competitor: calibration chi2 {disc.chi2:.1f} ({disc.n_terms} terms), held-out "
             f"dELPD over the base {compare(w_disc, w_base)[0]:.1f}")
     competitors = [w_disc] if w_disc is not None else []

@@ -84,6 +84,13 @@ OPTION_PARAMS = {
                                       "difference at every step, or Broyden updates from one forward difference "
                                       "per start, the declared final model then refitted with forward "
                                       "differences (0.4-0.45 of the forward runs; changes results)"),
+    "heldout_predictive": Param(str, "laplace", choices=["laplace", "sampled"],
+                                doc="the held-out coreflood's predictive under each calibrated model: linearised at "
+                                    "the optimum, or the posterior predictive sampled from predictive_draws draws "
+                                    "(integrates over flat parameter valleys; ~2 x predictive_draws forward runs "
+                                    "per scored model; needs held-out corefloods)"),
+    "predictive_draws": Param(int, 100, bounds=(20, 10000),
+                              doc="draws of the sampled held-out predictive (heldout_predictive = sampled)"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
     "path_reruns": Param(int, 0, bounds=(0, 5),
                          doc="reruns of the whole diagnosis along other optimiser paths (difference step x1.1, "
@@ -128,7 +135,8 @@ class Diagnose(Stage):
     #    injection rate as an input-correlation channel (rows only for corefloods with rate steps)
     # 10: with first_round_jacobian = "secant" the declared final model is refitted with forward differences; the
     #     report records every option and the base model's scheme and output step (summary.json "settings")
-    version = "10"
+    # 11: the heldout_predictive and predictive_draws options (the sampled posterior predictive, off by default)
+    version = "11"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})

@@ -1,0 +1,101 @@
+"""Held-out scores from the sampled posterior predictive, without the linearisation (docs/gap.md, Method:
+**Scores**; the ``heldout_predictive = "sampled"`` option).
+
+The linearised predictive of :mod:`~spflow.plugins.gap.predictive_scores` centres a calibrated model's prediction
+of the held-out coreflood at its optimum and spreads it with the Jacobian there. Where the calibration coreflood
+leaves a valley of parameter sets with nearly the same fit, the optimum can sit at the far end of the valley (a
+parameter at its bound) where the held-out prediction is both wrong and steep; the linearised predictive then
+scores the model far below one whose valley it shares (docs/gap.md: on twins, the truth's own refit scores 44-80
+nats below the base while the exact truth scores above it). The posterior predictive integrates over the valley:
+
+    p(y_held | y_cal) = int p(y_held | z) p(z | y_cal) dz,   p(z | y_cal) ~ exp(-chi2_cal(z) / 2) on the unit box
+
+(the posterior of the bounded least squares the calibration solves: a flat prior on the box). It is estimated by
+self-normalised importance sampling with the Laplace posterior as proposal: ``z_k ~ N(z_hat, C)`` truncated to the
+box (rejection), ``C`` the linearised covariance of :func:`~spflow.plugins.gap.quantification.parameter_covariance`,
+log weights ``-chi2_cal(z_k) / 2 - log q(z_k)`` Pareto-smoothed (PSIS; Vehtari, Simpson, Gelman, Yao & Gabry 2024)
+and normalised, and
+
+    p(y_held | y_cal) ~ sum_k w_k N(y_held; y_held(z_k), Sigma)
+
+in the whitened metric of the shared error model, where ``N`` reduces to ``exp(-|h_k|^2 / 2)`` with ``h_k`` the
+whitened held-out residuals of draw ``k`` (constants shared by all models dropped, as in the linearised terms). Its
+sequential pointwise terms ``log p(y_1..i) - log p(y_1..i-1)`` sum to the total; the gradient ``sum_k r_k h_k``
+(``r_k`` the draws' posterior responsibilities given the held-out data) takes the place of ``S^-1 w`` in the
+measurement SE, and the whitened residual reported is that of the predictive mean, ``sum_k w_k h_k``.
+
+The estimate is only as good as the proposal covers the posterior: its effective sample size ``1 / sum w_k^2`` and
+the Pareto ``k`` of the weights (``k > 0.7``: unreliable) are returned with it. Coordinate ``j``'s standard normals
+come from the stream ``(seed, j)``, so models sharing calibrated parameters share their draws' randomness (common
+random numbers) and a rerun reproduces every score.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.linalg import cholesky
+from scipy.special import logsumexp, softmax
+
+from spflow.core.errors import SpflowError
+from spflow.plugins.calibration.diagnostics import arviz
+
+from .least_squares import Fit
+from .predictive_scores import Predictive
+from .quantification import parameter_covariance
+
+__all__ = ["HELDOUT_PREDICTIVES", "mixture_terms", "posterior_draws", "sampled_predictive"]
+
+#: held-out predictive distributions of a calibrated model: linearised at the optimum, or sampled (module docstring)
+HELDOUT_PREDICTIVES = ("laplace", "sampled")
+
+#: proposals drawn per requested draw before the truncation to the unit box
+_POOL = 20
+
+Residuals = Callable[[list[np.ndarray]], list[np.ndarray]]
+
+
+def posterior_draws(fitted: Fit, tau: float, draws: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """(draws, q) unit-box coordinates from ``N(z_hat, C)`` truncated to the box, and ``-log q`` of each up to a
+    constant (``|e|^2 / 2`` of its standard normals); at most ``draws`` of ``_POOL * draws`` proposals."""
+    ok = np.all(np.isfinite(fitted.jacobian), axis=1)
+    factor = cholesky(parameter_covariance(fitted.jacobian[ok], tau), lower=True)
+    q, pool = factor.shape[0], _POOL * draws
+    e = np.column_stack([np.random.default_rng([seed, j]).standard_normal(pool) for j in range(q)])
+    z = fitted.z[None, :] + e @ factor.T
+    inside = np.all((z >= 0.0) & (z <= 1.0), axis=1)
+    if not inside.any():
+        raise SpflowError(f"none of {pool} draws of the linearised posterior of {fitted.message!r} lies inside the "
+                          "unit box; the sampled predictive cannot be estimated")
+    return z[inside][:draws], 0.5 * np.sum(e[inside][:draws] ** 2, axis=1)
+
+
+def mixture_terms(log_weights: np.ndarray, held: np.ndarray) -> Predictive:
+    """Predictive terms of the mixture ``sum_k w_k N(h; h_k, I)`` of the draws' whitened held-out residuals
+    ``held`` (draws x points) with normalised ``log_weights`` (module docstring)."""
+    running = logsumexp(log_weights[:, None] - 0.5 * np.cumsum(held**2, axis=1), axis=0)
+    lpd = np.diff(np.concatenate([[logsumexp(log_weights)], running]))
+    gradient = softmax(log_weights - 0.5 * np.sum(held**2, axis=1)) @ held
+    return Predictive(lpd, gradient, np.exp(log_weights - logsumexp(log_weights)) @ held)
+
+
+def sampled_predictive(calibration: Residuals, heldout: Residuals, fitted: Fit, *, tau: float, draws: int,
+                       seed: int, shift: np.ndarray | None = None) -> Predictive:
+    """Sampled posterior predictive terms of the held-out points under ``fitted`` (module docstring).
+
+    ``calibration`` and ``heldout``: whitened residuals of the calibration and held-out points at a batch of
+    unit-box coordinates (``WhitenedProblem.residuals``); ``shift``: whitened shift of the held-out predictions (a
+    transferred discrepancy)."""
+    zs, neg_log_q = posterior_draws(fitted, tau, draws, seed)
+    points = list(zs)
+    chi2 = np.array([r @ r for r in calibration(points)])
+    held = np.array(heldout(points))
+    if shift is not None:
+        held = held + shift[None, :]
+    az = arviz()
+    log_weights, k = az.psislw(-0.5 * chi2 + neg_log_q)
+    out = mixture_terms(np.asarray(log_weights, float), held)
+    weights = np.exp(log_weights - logsumexp(log_weights))
+    return Predictive(out.lpd, out.gradient, out.whitened, ess=float(1.0 / np.sum(weights**2)),
+                      pareto_k=float(k))
