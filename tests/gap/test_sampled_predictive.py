@@ -55,6 +55,32 @@ def test_posterior_cut_by_the_box_matches_quadrature():
     assert draws.min() >= 0.0 and len(draws) == 500
 
 
+def test_gibbs_top_up_in_a_corner_matches_quadrature():
+    """A wide posterior whose optimum sits in the box's corner, sampled by the Gibbs sampler alone (``pool = 0``;
+    with few proposals inside the box it supplies the missing draws): the mixture must match the two-dimensional
+    quadrature, and the draws the truncated normal's mean (plain rejection from many draws as reference)."""
+    from scipy.integrate import dblquad
+
+    from spflow.plugins.gap.quantification import parameter_covariance
+
+    jc = np.array([[3.0, 2.8], [2.9, 3.1], [0.3, -0.2]])   # a valley along (1, -1)
+    z_hat = np.array([0.02, 0.03])
+    b = jc @ z_hat + np.array([0.1, -0.1, 0.05])
+    ah, o = np.array([[2.0, 1.0], [-1.0, 3.0]]), np.array([0.5, 0.6])
+    f = fitted(z_hat, jc, b)
+    out = sampled_predictive(linear(jc, b), linear(ah, o), f, tau=0.5, draws=3000, seed=7, pool=0)
+    like = lambda y, x: np.exp(-0.5 * np.sum((jc @ [x, y] - b) ** 2))  # noqa: E731
+    held = lambda y, x: np.exp(-0.5 * np.sum((ah @ [x, y] - o) ** 2))  # noqa: E731
+    exact = np.log(dblquad(lambda y, x: like(y, x) * held(y, x), 0.0, 1.0, 0.0, 1.0)[0]
+                   / dblquad(like, 0.0, 1.0, 0.0, 1.0)[0])
+    assert out.lpd.sum() == pytest.approx(exact, abs=0.05)
+    draws, _ = posterior_draws(f, 0.5, 3000, 0, pool=0)
+    assert len(draws) == 3000 and draws.min() >= 0.0 and draws.max() <= 1.0
+    ref = np.random.default_rng(1).multivariate_normal(z_hat, parameter_covariance(jc, 0.5), size=400000)
+    ref = ref[np.all((ref >= 0.0) & (ref <= 1.0), axis=1)]
+    assert draws.mean(axis=0) == pytest.approx(ref.mean(axis=0), abs=0.02)
+
+
 def test_sequential_terms_sum_to_the_mixture_and_shift_moves_it():
     rng = np.random.default_rng(0)
     held = rng.normal(size=(5, 7))

@@ -12,7 +12,7 @@ nats below the base while the exact truth scores above it). The posterior predic
 
 (the posterior of the bounded least squares the calibration solves: a flat prior on the box). It is estimated by
 self-normalised importance sampling with the Laplace posterior as proposal: ``z_k ~ N(z_hat, C)`` truncated to the
-box (rejection), ``C`` the linearised covariance of :func:`~spflow.plugins.gap.quantification.parameter_covariance`,
+box, ``C`` the linearised covariance of :func:`~spflow.plugins.gap.quantification.parameter_covariance`,
 log weights ``-chi2_cal(z_k) / 2 - log q(z_k)`` Pareto-smoothed (PSIS; Vehtari, Simpson, Gelman, Yao & Gabry 2024)
 and normalised, and
 
@@ -24,10 +24,15 @@ sequential pointwise terms ``log p(y_1..i) - log p(y_1..i-1)`` sum to the total;
 (``r_k`` the draws' posterior responsibilities given the held-out data) takes the place of ``S^-1 w`` in the
 measurement SE, and the whitened residual reported is that of the predictive mean, ``sum_k w_k h_k``.
 
-The estimate is only as good as the proposal covers the posterior: its effective sample size ``1 / sum w_k^2`` and
-the Pareto ``k`` of the weights (``k > 0.7``: unreliable) are returned with it. Coordinate ``j``'s standard normals
-come from the stream ``(seed, j)``, so models sharing calibrated parameters share their draws' randomness (common
-random numbers) and a rerun reproduces every score.
+The truncated proposal is sampled by rejection from ``N(z_hat, C)``; where the optimum sits in a corner of the box
+with a wide posterior so that too few of ``_POOL`` proposals per draw fall inside, the rest come from a Gibbs
+sampler of the same truncated normal (each coordinate from its conditional normal truncated to [0, 1]; Geweke
+1991), started at the optimum. Both give draws of one density whose normalising constant cancels in the
+self-normalised weights, ``-log q = (z - z_hat)' C^-1 (z - z_hat) / 2``. The estimate is only as good as the
+proposal covers the posterior: its effective sample size ``1 / sum w_k^2`` and the Pareto ``k`` of the weights
+(``k > 0.7``: unreliable) are returned with it. Coordinate ``j``'s standard normals come from the stream
+``(seed, j)``, so models sharing calibrated parameters share their draws' randomness (common random numbers), and
+a rerun reproduces every score.
 """
 
 from __future__ import annotations
@@ -37,8 +42,8 @@ from collections.abc import Callable
 import numpy as np
 from scipy.linalg import cholesky
 from scipy.special import logsumexp, softmax
+from scipy.stats import truncnorm
 
-from spflow.core.errors import SpflowError
 from spflow.plugins.calibration.diagnostics import arviz
 
 from .least_squares import Fit
@@ -52,23 +57,44 @@ HELDOUT_PREDICTIVES = ("laplace", "sampled")
 
 #: proposals drawn per requested draw before the truncation to the unit box
 _POOL = 20
+#: Gibbs sweeps discarded before the first kept draw, and sweeps between kept draws
+_BURN_IN, _THIN = 20, 2
 
 Residuals = Callable[[list[np.ndarray]], list[np.ndarray]]
 
 
-def posterior_draws(fitted: Fit, tau: float, draws: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(draws, q) unit-box coordinates from ``N(z_hat, C)`` truncated to the box, and ``-log q`` of each up to a
-    constant (``|e|^2 / 2`` of its standard normals); at most ``draws`` of ``_POOL * draws`` proposals."""
+def posterior_draws(fitted: Fit, tau: float, draws: int, seed: int, pool: int = _POOL) -> tuple[np.ndarray,
+                                                                                                 np.ndarray]:
+    """(draws, q) unit-box coordinates from ``N(z_hat, C)`` truncated to the box -- by rejection from ``pool *
+    draws`` proposals, topped up by Gibbs sampling when fewer fall inside -- and ``-log q`` of each up to a constant
+    (module docstring)."""
     ok = np.all(np.isfinite(fitted.jacobian), axis=1)
-    factor = cholesky(parameter_covariance(fitted.jacobian[ok], tau), lower=True)
-    q, pool = factor.shape[0], _POOL * draws
-    e = np.column_stack([np.random.default_rng([seed, j]).standard_normal(pool) for j in range(q)])
+    cov = parameter_covariance(fitted.jacobian[ok], tau)
+    factor = cholesky(cov, lower=True)
+    q = factor.shape[0]
+    e = np.column_stack([np.random.default_rng([seed, j]).standard_normal(pool * draws) for j in range(q)])
     z = fitted.z[None, :] + e @ factor.T
-    inside = np.all((z >= 0.0) & (z <= 1.0), axis=1)
-    if not inside.any():
-        raise SpflowError(f"none of {pool} draws of the linearised posterior of {fitted.message!r} lies inside the "
-                          "unit box; the sampled predictive cannot be estimated")
-    return z[inside][:draws], 0.5 * np.sum(e[inside][:draws] ** 2, axis=1)
+    z = z[np.all((z >= 0.0) & (z <= 1.0), axis=1)][:draws]
+    precision = np.linalg.inv(cov)
+    if len(z) < draws:
+        z = np.vstack([z, _gibbs(fitted.z, precision, draws - len(z), np.random.default_rng([seed, q]))])
+    d = z - fitted.z[None, :]
+    return z, 0.5 * np.einsum("ki,ij,kj->k", d, precision, d)
+
+
+def _gibbs(mean: np.ndarray, precision: np.ndarray, draws: int, rng: np.random.Generator) -> np.ndarray:
+    """``draws`` states of a Gibbs sampler of ``N(mean, precision^-1)`` truncated to the unit box, started at
+    ``mean`` (inside the box), after ``_BURN_IN`` sweeps and every ``_THIN`` sweeps."""
+    z = np.clip(mean, 0.0, 1.0).astype(float)
+    sd = 1.0 / np.sqrt(np.diag(precision))
+    out = []
+    for sweep in range(_BURN_IN + _THIN * draws):
+        for j in range(z.size):
+            m = mean[j] - (precision[j] @ (z - mean) - precision[j, j] * (z[j] - mean[j])) / precision[j, j]
+            z[j] = truncnorm.rvs((0.0 - m) / sd[j], (1.0 - m) / sd[j], loc=m, scale=sd[j], random_state=rng)
+        if sweep >= _BURN_IN and (sweep - _BURN_IN) % _THIN == _THIN - 1:
+            out.append(z.copy())
+    return np.array(out)
 
 
 def mixture_terms(log_weights: np.ndarray, held: np.ndarray) -> Predictive:
@@ -81,13 +107,13 @@ def mixture_terms(log_weights: np.ndarray, held: np.ndarray) -> Predictive:
 
 
 def sampled_predictive(calibration: Residuals, heldout: Residuals, fitted: Fit, *, tau: float, draws: int,
-                       seed: int, shift: np.ndarray | None = None) -> Predictive:
+                       seed: int, shift: np.ndarray | None = None, pool: int = _POOL) -> Predictive:
     """Sampled posterior predictive terms of the held-out points under ``fitted`` (module docstring).
 
     ``calibration`` and ``heldout``: whitened residuals of the calibration and held-out points at a batch of
     unit-box coordinates (``WhitenedProblem.residuals``); ``shift``: whitened shift of the held-out predictions (a
-    transferred discrepancy)."""
-    zs, neg_log_q = posterior_draws(fitted, tau, draws, seed)
+    transferred discrepancy); ``pool``: proposals per draw for the rejection sampler (0: Gibbs draws only)."""
+    zs, neg_log_q = posterior_draws(fitted, tau, draws, seed, pool)
     points = list(zs)
     chi2 = np.array([r @ r for r in calibration(points)])
     held = np.array(heldout(points))
