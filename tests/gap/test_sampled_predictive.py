@@ -136,3 +136,12 @@ def test_a_twin_the_linearised_predictive_leaves_unattributed_gets_its_truth():
     assert score.delta_elpd > 2.0 * score.se > 0.0
     held = g.steps[0].out_of_sample["dispersion"]
     assert np.isfinite(held.ess) and held.ess >= 2.0
+    # the report and summary.json carry every refit's effective sample size and Pareto k
+    from spflow.plugins.gap.report import report_dataset, summary
+
+    report = report_dataset(g)
+    j = list(report["candidate"].values).index("dispersion")
+    assert float(report["heldout_ess"][0, j]) == pytest.approx(held.ess, rel=1e-6)
+    rows = {row["name"]: row for row in summary(report)["ranked_effects"]}
+    assert rows["dispersion"]["heldout_pareto_k"] == pytest.approx(held.pareto_k, abs=1e-6)
+    assert report.attrs["options"].count('"heldout_predictive": "sampled"') == 1
