@@ -19,8 +19,8 @@
    (or a shortlist, extended in screen order while the gap is significant and no refit passes), a shortlist after
    it -- (:mod:`~spflow.plugins.gap.candidates`) scored out of sample (held-out experiments, else leave-one-slug-out;
    :mod:`~spflow.plugins.gap.predictive_scores`, or the sampled posterior predictive of
-   :mod:`~spflow.plugins.gap.sampled_predictive` with ``heldout_predictive = "sampled"``; PSIS-LOO on the calibration data is reported next to it,
-   :mod:`~spflow.plugins.gap.psis_loo`), the decision rule and greedy addition of further effects
+   :mod:`~spflow.plugins.gap.sampled_predictive` with ``heldout_predictive = "sampled"``; PSIS-LOO on the
+   calibration data is reported next to it, :mod:`~spflow.plugins.gap.psis_loo`), the decision rule and greedy addition of further effects
    (:mod:`~spflow.plugins.gap.verdict`; the calibration gap is significant on the omnibus or the targeted test).
 4. **How far** — gap closed, RMSE ratios, interval coverage and parameter shifts of the final model against the
    base (:mod:`~spflow.plugins.gap.quantification`).
@@ -120,7 +120,7 @@ class Options:
     #: the optimum) or ``"sampled"`` (the posterior predictive by importance sampling from ``predictive_draws``
     #: draws of the Laplace posterior: integrates over the flat valleys the linearisation misjudges; about
     #: 2 x ``predictive_draws`` forward runs per scored model; needs held-out corefloods; opt-in until a whole twin
-    #: study has judged it, docs/gap.md, Cost)
+    #: study has judged it, docs/gap.md, Scores)
     heldout_predictive: str = "laplace"
     predictive_draws: int = 100
 

@@ -5,8 +5,8 @@ The linearised predictive of :mod:`~spflow.plugins.gap.predictive_scores` centre
 of the held-out coreflood at its optimum and spreads it with the Jacobian there. Where the calibration coreflood
 leaves a valley of parameter sets with nearly the same fit, the optimum can sit at the far end of the valley (a
 parameter at its bound) where the held-out prediction is both wrong and steep; the linearised predictive then
-scores the model far below one whose valley it shares (docs/gap.md: on twins, the truth's own refit scores 44-80
-nats below the base while the exact truth scores above it). The posterior predictive integrates over the valley:
+scores the model far below one whose valley it shares (docs/gap.md: on twins, the truth's own refit scores 16-80
+nats below the base while the exact truth scores 4-47 nats above it). The posterior predictive integrates over the valley:
 
     p(y_held | y_cal) = int p(y_held | z) p(z | y_cal) dz,   p(z | y_cal) ~ exp(-chi2_cal(z) / 2) on the unit box
 
