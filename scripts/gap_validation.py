@@ -183,21 +183,22 @@ def _truth_params(base: BaseModel, truth: dict) -> dict:
 
 
 def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], numerical_error: bool = True,
-             first_round_jacobian: str = "difference", heldout_predictive: str = "laplace") -> dict:
+             first_round_jacobian: str = "difference", heldout_predictive: str = "laplace",
+             options_seed: int = 0) -> dict:
     """Generate one twin, diagnose it blind (likelihood ``variables``; ``numerical_error=False``: without the
-    numerical-error term; ``first_round_jacobian``, ``heldout_predictive``: those options), and score the diagnosis
-    against the truth."""
+    numerical-error term; ``first_round_jacobian``, ``heldout_predictive``, ``options_seed``: those options, the last
+    ``Options.seed``), and score the diagnosis against the truth."""
     start_cpu, start = time.process_time(), time.perf_counter()
     base, truth, data = twin(spec, cells, seed)
     snrs = _snr(base, truth, data[0], variables)
     options = Options(variables=variables, first_round_jacobian=first_round_jacobian,
-                      heldout_predictive=heldout_predictive,
+                      heldout_predictive=heldout_predictive, seed=options_seed,
                       **({} if numerical_error else {"numerical_variants": ()}))
     g = diagnose([data[0]], [data[1]], base, CATALOGUE, options)
     return {
         "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
         "numerical_error": numerical_error, "first_round_jacobian": first_round_jacobian,
-        "heldout_predictive": heldout_predictive,
+        "heldout_predictive": heldout_predictive, "options_seed": options_seed,
         "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], **snrs,
         **outcome(g, base, truth, variables),
         "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
@@ -972,6 +973,9 @@ def main(argv=None) -> int:
                    help="Options.first_round_jacobian of every diagnosis (docs/gap.md, Cost; default: difference)")
     p.add_argument("--heldout-predictive", choices=("laplace", "sampled"), default="laplace",
                    help="Options.heldout_predictive of every diagnosis (docs/gap.md, Scores; default: laplace)")
+    p.add_argument("--options-seed", type=int, default=0,
+                   help="Options.seed of every diagnosis: the sampled predictive's draws, the signature replicates "
+                        "and extra starts (default 0; another value shows how much a verdict owes to them)")
     p.add_argument("--baseline", metavar="DIR",
                    help="results directory of an earlier study of the same twins: the report compares the two on "
                         "the twins both have (e.g. a changed default against the records it replaces)")
@@ -998,7 +1002,8 @@ def main(argv=None) -> int:
         specs = scenarios(*counts)
         file = results / f"{key}.jsonl"
         done = _records(file, args.cells)
-        for option, default in (("first_round_jacobian", "difference"), ("heldout_predictive", "laplace")):
+        for option, default in (("first_round_jacobian", "difference"), ("heldout_predictive", "laplace"),
+                                ("options_seed", 0)):
             wanted = getattr(args, option)
             mixed = {r.get(option, default) for r in done.values()} - {wanted}
             if mixed:
@@ -1011,7 +1016,7 @@ def main(argv=None) -> int:
         with file.open("a") as fh:
             for record in Parallel(n_jobs=args.jobs, return_as="generator")(
                     delayed(run_twin)(s, args.cells, seed, variables, not args.no_numerical_error,
-                                      args.first_round_jacobian, args.heldout_predictive)
+                                      args.first_round_jacobian, args.heldout_predictive, args.options_seed)
                     for s, seed in todo):
                 fh.write(json.dumps(record) + "\n")
                 fh.flush()
