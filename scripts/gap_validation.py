@@ -247,7 +247,9 @@ def _where(g, variables) -> dict:
 
 def _step0(g) -> list[dict]:
     """The first greedy step's refitted candidates with what an ambiguity rule needs: scores, calibration chi^2,
-    and the measurement SE of each one's ELPD difference to the best passing candidate."""
+    and the measurement SE of each one's ELPD difference to the best passing candidate; and what each test of the
+    decision rule saw (the competitor's dELPD and SE, the dispersion factor, the calibration chi^2 drop), so that a
+    failed candidate's record says which test stopped it."""
     if not g.steps:
         return []
     step = g.steps[0]
@@ -264,7 +266,8 @@ def _step0(g) -> list[dict]:
                     "strength_z": x.strength_z,
                     "physical": x.physical, "gap_closed": x.gap_closed, "chi2": step.fits[name].chi2,
                     "passes": passes(x, g.options.rule), "pair_se": pair_se, "delta_loo": loo[0],
-                    "delta_loo_se": loo[1], "pareto_k_max": loo[2]})
+                    "delta_loo_se": loo[1], "pareto_k_max": loo[2], "competitor_delta": x.competitor_delta,
+                    "competitor_se": x.competitor_se, "dispersion": x.dispersion, "chi2_drop": x.chi2_drop})
     return out
 
 

@@ -160,3 +160,24 @@ def test_set_misses_by_hand():
     assert gv.set_misses(records) == {"unattributed": {"held-out loss": 1, "gain within the margin": 1,
                                                        "gain beyond the margin": 1},
                                       "none": {"not refitted": 1}}
+
+
+def test_step0_rows_say_which_test_stopped_a_candidate():
+    """A candidate that beats the base but not the discrepancy competitor: its row carries the competitor's dELPD
+    and SE (and the dispersion factor and chi^2 drop), and ``passes`` is False although the base test alone holds."""
+    from types import SimpleNamespace
+
+    from spflow.plugins.gap.verdict import CandidateScore, Rule
+
+    score = CandidateScore("dispersion", 30.0, 5.0, 9.0, 0.4, -5.0, True, 0.8, 40.0, np.zeros(3),
+                           competitor_delta=3.0, competitor_se=5.0, dispersion=1.2)
+    step = SimpleNamespace(scores={"dispersion": score}, fits={"dispersion": SimpleNamespace(chi2=50.0)}, loo={})
+    g = SimpleNamespace(steps=[step], options=SimpleNamespace(rule=Rule()))
+    [row] = gv._step0(g)
+    assert row["passes"] is False
+    assert (row["competitor_delta"], row["competitor_se"], row["dispersion"], row["chi2_drop"]) == (3.0, 5.0, 1.2,
+                                                                                                   40.0)
+    # the same scores with a competitor it beats pass
+    beaten = CandidateScore(**{**score.__dict__, "competitor_delta": 25.0})
+    step.scores = {"dispersion": beaten}
+    assert gv._step0(g)[0]["passes"] is True
