@@ -81,6 +81,25 @@ def test_gibbs_top_up_in_a_corner_matches_quadrature():
     assert draws.mean(axis=0) == pytest.approx(ref.mean(axis=0), abs=0.02)
 
 
+def test_monte_carlo_error_matches_the_spread_over_seeds():
+    """The reported Monte Carlo SE of the log predictive against the standard deviation of the estimate over 300
+    independent seeds of the draws (100 draws each), on a linear-Gaussian model where the held-out flood is
+    informative enough that the estimate is noisy."""
+    rng = np.random.default_rng(5)
+    jc = rng.normal(size=(30, 2)) * 5.0
+    z_true = np.array([0.5, 0.45])
+    b = jc @ z_true + rng.normal(size=30)
+    z_hat = np.linalg.lstsq(jc, b, rcond=None)[0]
+    ah = rng.normal(size=(15, 2)) * 25.0
+    o = ah @ z_true + rng.normal(size=15)
+    runs = [sampled_predictive(linear(jc, b), linear(ah, o), fitted(z_hat, jc, b), tau=0.5, draws=100, seed=s)
+            for s in range(300)]
+    spread = np.std([r.total for r in runs], ddof=1)
+    reported = np.median([r.mcse for r in runs])
+    assert spread > 0.05                         # (a case where the error matters)
+    assert 0.7 < reported / spread < 1.4
+
+
 def test_sequential_terms_sum_to_the_mixture_and_shift_moves_it():
     rng = np.random.default_rng(0)
     held = rng.normal(size=(5, 7))
@@ -144,4 +163,5 @@ def test_a_twin_the_linearised_predictive_leaves_unattributed_gets_its_truth():
     assert float(report["heldout_ess"][0, j]) == pytest.approx(held.ess, rel=1e-6)
     rows = {row["name"]: row for row in summary(report)["ranked_effects"]}
     assert rows["dispersion"]["heldout_pareto_k"] == pytest.approx(held.pareto_k, abs=1e-6)
+    assert rows["dispersion"]["heldout_mcse"] == pytest.approx(held.mcse, abs=1e-6) and held.mcse > 0.0
     assert report.attrs["options"].count('"heldout_predictive": "sampled"') == 1

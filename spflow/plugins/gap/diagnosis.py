@@ -389,7 +389,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                                draws=options.predictive_draws, seed=options.seed,
                                shift=None if shift is None else layout_held.whiten(shift))
         say(f"sampled held-out predictive of {_label(f)}: effective sample size {w.ess:.1f} of "
-            f"{options.predictive_draws} draws, Pareto k {w.pareto_k:.2f}")
+            f"{options.predictive_draws} draws, Pareto k {w.pareto_k:.2f}, Monte Carlo SE {w.mcse:.2f} nats")
         return w
 
     def out_of_sample(f: Fit) -> Predictive:

@@ -46,13 +46,15 @@ __all__ = ["Predictive", "predictive", "leave_one_slug_out", "compare"]
 class Predictive:
     """Pointwise log predictive densities of held-out points, ``S^-1 w`` and the plain whitened residuals; for a
     sampled predictive (:mod:`~spflow.plugins.gap.sampled_predictive`) also the draws' effective sample size and
-    the Pareto k of their importance weights (NaN for the linearised one)."""
+    the Pareto k of their importance weights and the Monte Carlo standard error of the total (NaN for the
+    linearised one)."""
 
     lpd: np.ndarray
     gradient: np.ndarray
     whitened: np.ndarray
     ess: float = float("nan")
     pareto_k: float = float("nan")
+    mcse: float = float("nan")
 
     @property
     def total(self) -> float:

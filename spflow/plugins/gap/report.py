@@ -18,7 +18,7 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
   ``xcorr_effect``, ``xcorr_significant``;
 * ``candidate`` tables per greedy ``step``: ``screen_z``, ``snr``, ``absorbed``, ``fitted_strength``,
   ``delta_elpd`` (+ SEs), ``delta_elpd_loo`` (+ SE, ``pareto_k_max``; PSIS-LOO on the calibration data, reported
-  only), ``heldout_ess`` and ``heldout_pareto_k`` (the sampled held-out predictive's draws, option
+  only), ``heldout_ess``, ``heldout_pareto_k`` and ``heldout_mcse`` (the sampled held-out predictive's draws, option
   ``heldout_predictive = "sampled"``; NaN otherwise), ``gap_closed``, ``passes``; ``fingerprint_cos`` of the first
   step;
 * ``param`` table: ``theta`` per model (units per parameter: ``param_units``, :mod:`spflow.core.cf_metadata`) and
@@ -253,7 +253,8 @@ def _candidate_vars(g: GapDiagnosis):
                                                   "delta_elpd",
                                                   "delta_elpd_se", "delta_elpd_se_pointwise", "gap_closed",
                                                   "chi2_calibration", "delta_elpd_loo", "delta_elpd_loo_se",
-                                                  "pareto_k_max", "heldout_ess", "heldout_pareto_k")}
+                                                  "pareto_k_max", "heldout_ess", "heldout_pareto_k",
+                                                  "heldout_mcse")}
     flags = {k: np.zeros(shape, dtype=np.int8) for k in ("shortlisted", "passes", "physical")}
     for s, step in enumerate(g.steps):
         for i, name in enumerate(step.screen.names):
@@ -274,6 +275,7 @@ def _candidate_vars(g: GapDiagnosis):
             if name in step.out_of_sample:  # (NaN unless the held-out predictive is sampled)
                 held = step.out_of_sample[name]
                 tables["heldout_ess"][s, j], tables["heldout_pareto_k"][s, j] = held.ess, held.pareto_k
+                tables["heldout_mcse"][s, j] = held.mcse
             if name in step.loo:
                 loo = step.loo[name]
                 tables["delta_elpd_loo"][s, j], tables["delta_elpd_loo_se"][s, j], tables["pareto_k_max"][s, j] = loo
@@ -286,7 +288,9 @@ def _candidate_vars(g: GapDiagnosis):
                 "heldout_ess": {"long_name": "effective sample size of the sampled held-out predictive's draws "
                                              "(NaN: linearised predictive)"},
                 "heldout_pareto_k": {"long_name": "Pareto k of the sampled held-out predictive's importance weights "
-                                                  "(> 0.7: unreliable; NaN: linearised predictive)"}} | _NATS
+                                                  "(> 0.7: unreliable; NaN: linearised predictive)"},
+                "heldout_mcse": {"long_name": "Monte Carlo standard error of the candidate's sampled held-out log "
+                                              "predictive density (NaN: linearised predictive)"}} | _NATS
     data = {k: (("step", "candidate"), v, {"units": "1", **names_of.get(k, {})}) for k, v in tables.items()}
     data |= {k: (("step", "candidate"), v, {"units": "1"}) for k, v in flags.items()}
     data["step_reference"] = ("step", [s.reference for s in g.steps])
@@ -410,6 +414,7 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
                        delta_elpd_loo_se=_f(r["delta_elpd_loo_se"][0, j]) if "delta_elpd_loo" in r else None,
                        heldout_ess=_f(r["heldout_ess"][0, j]) if "heldout_ess" in r else None,
                        heldout_pareto_k=_f(r["heldout_pareto_k"][0, j]) if "heldout_ess" in r else None,
+                       heldout_mcse=_f(r["heldout_mcse"][0, j]) if "heldout_mcse" in r else None,
                        physical=bool(r["physical"][0, j]), passes=bool(r["passes"][0, j]))
         ranked.append(row)
     def descending(x):

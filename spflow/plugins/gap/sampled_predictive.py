@@ -24,13 +24,19 @@ sequential pointwise terms ``log p(y_1..i) - log p(y_1..i-1)`` sum to the total;
 (``r_k`` the draws' posterior responsibilities given the held-out data) takes the place of ``S^-1 w`` in the
 measurement SE, and the whitened residual reported is that of the predictive mean, ``sum_k w_k h_k``.
 
+The Monte Carlo error of the estimate ``p_hat = sum_k w_k L_k`` (``L_k = exp(-|h_k|^2 / 2)``) is the delta-method
+standard error of a self-normalised importance-sampling estimate (Owen 2013, Monte Carlo theory, methods and examples, ch. 9),
+``var(p_hat) ~ sum_k w_k^2 (L_k - p_hat)^2``; on the log scale ``mcse = sqrt(sum_k (r_k - w_k)^2)`` with
+``r_k = w_k L_k / p_hat`` the responsibilities. It treats the draws as independent (the Gibbs top-up's are
+correlated) and ignores the Pareto smoothing; it is reported, not used by the decision rule.
+
 The truncated proposal is sampled by rejection from ``N(z_hat, C)``; where the optimum sits in a corner of the box
 with a wide posterior so that too few of ``_POOL`` proposals per draw fall inside, the rest come from a Gibbs
 sampler of the same truncated normal (each coordinate from its conditional normal truncated to [0, 1]; Geweke
 1991), started at the optimum. Both give draws of one density whose normalising constant cancels in the
 self-normalised weights, ``-log q = (z - z_hat)' C^-1 (z - z_hat) / 2``. The estimate is only as good as the
 proposal covers the posterior: its effective sample size ``1 / sum w_k^2`` and the Pareto ``k`` of the weights
-(``k > 0.7``: unreliable) are returned with it. Coordinate ``j``'s standard normals come from the stream
+(``k > 0.7``: unreliable) are returned with it, and the Monte Carlo error of the log predictive. Coordinate ``j``'s standard normals come from the stream
 ``(seed, j)``, so models sharing calibrated parameters share their draws' randomness (common random numbers), and
 a rerun reproduces every score.
 """
@@ -102,8 +108,10 @@ def mixture_terms(log_weights: np.ndarray, held: np.ndarray) -> Predictive:
     ``held`` (draws x points) with normalised ``log_weights`` (module docstring)."""
     running = logsumexp(log_weights[:, None] - 0.5 * np.cumsum(held**2, axis=1), axis=0)
     lpd = np.diff(np.concatenate([[logsumexp(log_weights)], running]))
-    gradient = softmax(log_weights - 0.5 * np.sum(held**2, axis=1)) @ held
-    return Predictive(lpd, gradient, np.exp(log_weights - logsumexp(log_weights)) @ held)
+    responsibilities = softmax(log_weights - 0.5 * np.sum(held**2, axis=1))
+    weights = softmax(log_weights)
+    return Predictive(lpd, responsibilities @ held, weights @ held, ess=float(1.0 / np.sum(weights**2)),
+                      mcse=float(np.linalg.norm(responsibilities - weights)))
 
 
 def sampled_predictive(calibration: Residuals, heldout: Residuals, fitted: Fit, *, tau: float, draws: int,
@@ -122,6 +130,4 @@ def sampled_predictive(calibration: Residuals, heldout: Residuals, fitted: Fit, 
     az = arviz()
     log_weights, k = az.psislw(-0.5 * chi2 + neg_log_q)
     out = mixture_terms(np.asarray(log_weights, float), held)
-    weights = np.exp(log_weights - logsumexp(log_weights))
-    return Predictive(out.lpd, out.gradient, out.whitened, ess=float(1.0 / np.sum(weights**2)),
-                      pareto_k=float(k))
+    return Predictive(out.lpd, out.gradient, out.whitened, ess=out.ess, pareto_k=float(k), mcse=out.mcse)

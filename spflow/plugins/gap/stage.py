@@ -136,7 +136,8 @@ class Diagnose(Stage):
     # 10: with first_round_jacobian = "secant" the declared final model is refitted with forward differences; the
     #     report records every option and the base model's scheme and output step (summary.json "settings")
     # 11: the heldout_predictive and predictive_draws options (the sampled posterior predictive, off by default)
-    version = "11"
+    # 12: heldout_mcse (the sampled predictive's Monte Carlo error) in the report and summary.json
+    version = "12"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
