@@ -4,11 +4,14 @@
     python benchmarks/bench_diagnosis.py --quick --jobs 2    # 60 cells (smoke run)
     python benchmarks/bench_diagnosis.py --jobs 2 --cases bundled --modes exact,secant   # one case, two modes
 
-Two cases, each diagnosed in up to three modes in the same process, so the table shows them side by side:
+Two cases, each diagnosed in up to four modes in the same process, so the table shows them side by side:
 
 * ``before`` -- every cost reduction off (``Options(economy=False, first_round_jacobian="difference")``);
 * ``exact`` -- the exact reductions only (``economy=True``, forward-difference Jacobians in the first round of a
   multi-start fit: the default options);
+* ``laplace`` -- the exact reductions with the held-out scores linearised at the optimum
+  (``heldout_predictive="laplace"``, the default before stage version 13; the default's sampled posterior
+  predictive costs about 2 x ``predictive_draws`` forward runs per scored model: docs/gap.md, Scores);
 * ``secant`` -- the exact reductions plus Broyden (secant) Jacobians in the first round of every multi-start fit
   and a forward-difference refit of the declared final model (``first_round_jacobian="secant"``, an option that
   changes results: docs/gap.md, Cost).
@@ -104,6 +107,7 @@ def twin_case(cells: int):
 #: mode -> the options it replaces
 MODES = {"before": {"economy": False, "first_round_jacobian": "difference"},
          "exact": {"economy": True, "first_round_jacobian": "difference"},
+         "laplace": {"economy": True, "first_round_jacobian": "difference", "heldout_predictive": "laplace"},
          "secant": {"economy": True, "first_round_jacobian": "secant"}}
 
 

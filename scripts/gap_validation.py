@@ -183,7 +183,7 @@ def _truth_params(base: BaseModel, truth: dict) -> dict:
 
 
 def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], numerical_error: bool = True,
-             first_round_jacobian: str = "difference", heldout_predictive: str = "laplace",
+             first_round_jacobian: str = "difference", heldout_predictive: str = Options.heldout_predictive,
              options_seed: int = 0) -> dict:
     """Generate one twin, diagnose it blind (likelihood ``variables``; ``numerical_error=False``: without the
     numerical-error term; ``first_round_jacobian``, ``heldout_predictive``, ``options_seed``: those options, the last
@@ -974,8 +974,9 @@ def main(argv=None) -> int:
                    help="diagnose without the numerical-error term (Options.numerical_variants = ())")
     p.add_argument("--first-round-jacobian", choices=("difference", "secant"), default="difference",
                    help="Options.first_round_jacobian of every diagnosis (docs/gap.md, Cost; default: difference)")
-    p.add_argument("--heldout-predictive", choices=("laplace", "sampled"), default="laplace",
-                   help="Options.heldout_predictive of every diagnosis (docs/gap.md, Scores; default: laplace)")
+    p.add_argument("--heldout-predictive", choices=("laplace", "sampled"), default=Options.heldout_predictive,
+                   help="Options.heldout_predictive of every diagnosis (docs/gap.md, Scores; default: the "
+                        f"diagnosis's, {Options.heldout_predictive}; twins recorded without it used laplace)")
     p.add_argument("--options-seed", type=int, default=0,
                    help="Options.seed of every diagnosis: the sampled predictive's draws, the signature replicates "
                         "and extra starts (default 0; another value shows how much a verdict owes to them)")
@@ -1005,6 +1006,7 @@ def main(argv=None) -> int:
         specs = scenarios(*counts)
         file = results / f"{key}.jsonl"
         done = _records(file, args.cells)
+        # (twins recorded before an option existed ran with the value named here)
         for option, default in (("first_round_jacobian", "difference"), ("heldout_predictive", "laplace"),
                                 ("options_seed", 0)):
             wanted = getattr(args, option)

@@ -106,6 +106,20 @@ def test_strong_capillary_pressure_twin_is_identified(tmp_path):
     assert np.isfinite(report["fingerprint_cos"].values).all()
 
 
+def test_without_heldout_scores_are_leave_one_slug_out_and_say_so(tmp_path, capsys):
+    """The default held-out predictive is the sampled one; a diagnosis with no held-out coreflood scores by
+    leave-one-slug-out, linearised, and says so in its log and in the report's notes instead of failing."""
+    cal, _ = twin_files(tmp_path, {}, seed=11)
+    report = Diagnose(calibration=[cal], heldout=[], base=BASE, catalogue=["dispersion"], **OPTIONS).run(
+        StageContext("diagnose", verbose=True))
+    result = summary(report)
+    note = ("no held-out coreflood: the candidates are scored by leave-one-slug-out with the linearised predictive "
+            "(heldout_predictive = 'sampled' applies to held-out corefloods only)")
+    assert result["score"] == "leave_one_slug_out" and note in result["notes"]
+    assert result["settings"]["options"]["heldout_predictive"] == "sampled"
+    assert note in capsys.readouterr().err
+
+
 def test_bad_input_fails_before_any_work(tmp_path, capsys):
     (tmp_path / "base.toml").write_text(TOML.replace("max_nfev = 15", "max_nfev = 0"))
     assert main(["diagnose", "--observations", "BCF1", "--base", str(tmp_path / "base.toml")]) == 2

@@ -127,8 +127,6 @@ def test_the_options_are_checked_before_any_work():
     with pytest.raises(ParameterError, match=r"heldout_predictive = 'mcmc' is not allowed; allowed "
                                              r"\['laplace', 'sampled'\]"):
         diagnose(["no_such_file.nc"], ["other.nc"], base, options=Options(heldout_predictive="mcmc"))
-    with pytest.raises(ParameterError, match="'sampled' needs held-out corefloods"):
-        diagnose(["no_such_file.nc"], [], base, options=Options(heldout_predictive="sampled"))
     with pytest.raises(ParameterError, match=r"predictive_draws = 5 is out of range; allowed 20..10000"):
         diagnose(["no_such_file.nc"], ["other.nc"], base, options=Options(predictive_draws=5))
     with pytest.raises(ParameterError, match="heldout_predictive"):

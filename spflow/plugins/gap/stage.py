@@ -84,11 +84,11 @@ OPTION_PARAMS = {
                                       "difference at every step, or Broyden updates from one forward difference "
                                       "per start, the declared final model then refitted with forward "
                                       "differences (0.4-0.45 of the forward runs; changes results)"),
-    "heldout_predictive": Param(str, "laplace", choices=["laplace", "sampled"],
+    "heldout_predictive": Param(str, "sampled", choices=["laplace", "sampled"],
                                 doc="the held-out coreflood's predictive under each calibrated model: linearised at "
                                     "the optimum, or the posterior predictive sampled from predictive_draws draws "
                                     "(integrates over flat parameter valleys; ~2 x predictive_draws forward runs "
-                                    "per scored model; needs held-out corefloods)"),
+                                    "per scored model; leave-one-slug-out scores are always linearised)"),
     "predictive_draws": Param(int, 100, bounds=(20, 10000),
                               doc="draws of the sampled held-out predictive (heldout_predictive = sampled)"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
@@ -137,7 +137,8 @@ class Diagnose(Stage):
     #     report records every option and the base model's scheme and output step (summary.json "settings")
     # 11: the heldout_predictive and predictive_draws options (the sampled posterior predictive, off by default)
     # 12: heldout_mcse (the sampled predictive's Monte Carlo error) in the report and summary.json
-    version = "12"
+    # 13: heldout_predictive = "sampled" by default (the twin study's rule, docs/gap.md, Scores)
+    version = "13"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
