@@ -6,7 +6,8 @@ of the held-out coreflood at its optimum and spreads it with the Jacobian there.
 leaves a valley of parameter sets with nearly the same fit, the optimum can sit at the far end of the valley (a
 parameter at its bound) where the held-out prediction is both wrong and steep; the linearised predictive then
 scores the model far below one whose valley it shares (docs/gap.md: on twins, the truth's own refit scores 16-80
-nats below the base while the exact truth scores 4-47 nats above it). The posterior predictive integrates over the valley:
+nats below the base while the exact truth scores 4-47 nats above it). The posterior predictive integrates over the
+valley:
 
     p(y_held | y_cal) = int p(y_held | z) p(z | y_cal) dz,   p(z | y_cal) ~ exp(-chi2_cal(z) / 2) on the unit box
 
@@ -25,9 +26,9 @@ sequential pointwise terms ``log p(y_1..i) - log p(y_1..i-1)`` sum to the total;
 measurement SE, and the whitened residual reported is that of the predictive mean, ``sum_k w_k h_k``.
 
 The Monte Carlo error of the estimate ``p_hat = sum_k w_k L_k`` (``L_k = exp(-|h_k|^2 / 2)``) is the delta-method
-standard error of a self-normalised importance-sampling estimate (Owen 2013, Monte Carlo theory, methods and examples, ch. 9),
-``var(p_hat) ~ sum_k w_k^2 (L_k - p_hat)^2``; on the log scale ``mcse = sqrt(sum_k (r_k - w_k)^2)`` with
-``r_k = w_k L_k / p_hat`` the responsibilities. It treats the draws as independent (the Gibbs top-up's are
+standard error of a self-normalised importance-sampling estimate (Owen 2013, *Monte Carlo theory, methods and
+examples*, ch. 9), ``var(p_hat) ~ sum_k w_k^2 (L_k - p_hat)^2``; on the log scale
+``mcse = sqrt(sum_k (r_k - w_k)^2)`` with ``r_k = w_k L_k / p_hat`` the responsibilities. It treats the draws as independent (the Gibbs top-up's are
 correlated) and ignores the Pareto smoothing; it is reported, not used by the decision rule.
 
 The truncated proposal is sampled by rejection from ``N(z_hat, C)``; where the optimum sits in a corner of the box
@@ -36,9 +37,9 @@ sampler of the same truncated normal (each coordinate from its conditional norma
 1991), started at the optimum. Both give draws of one density whose normalising constant cancels in the
 self-normalised weights, ``-log q = (z - z_hat)' C^-1 (z - z_hat) / 2``. The estimate is only as good as the
 proposal covers the posterior: its effective sample size ``1 / sum w_k^2`` and the Pareto ``k`` of the weights
-(``k > 0.7``: unreliable) are returned with it, and the Monte Carlo error of the log predictive. Coordinate ``j``'s standard normals come from the stream
-``(seed, j)``, so models sharing calibrated parameters share their draws' randomness (common random numbers), and
-a rerun reproduces every score.
+(``k > 0.7``: unreliable) are returned with it, and the Monte Carlo error of the log predictive. Coordinate
+``j``'s standard normals come from the stream ``(seed, j)``, so models sharing calibrated parameters share their
+draws' randomness (common random numbers), and a rerun reproduces every score.
 """
 
 from __future__ import annotations
