@@ -28,8 +28,9 @@ measurement SE, and the whitened residual reported is that of the predictive mea
 The Monte Carlo error of the estimate ``p_hat = sum_k w_k L_k`` (``L_k = exp(-|h_k|^2 / 2)``) is the delta-method
 standard error of a self-normalised importance-sampling estimate (Owen 2013, *Monte Carlo theory, methods and
 examples*, ch. 9), ``var(p_hat) ~ sum_k w_k^2 (L_k - p_hat)^2``; on the log scale
-``mcse = sqrt(sum_k (r_k - w_k)^2)`` with ``r_k = w_k L_k / p_hat`` the responsibilities. It treats the draws as independent (the Gibbs top-up's are
-correlated) and ignores the Pareto smoothing; it is reported, not used by the decision rule.
+``mcse = sqrt(sum_k (r_k - w_k)^2)`` with ``r_k = w_k L_k / p_hat`` the responsibilities. It treats the draws as
+independent (the Gibbs top-up's are correlated) and ignores the Pareto smoothing; it is reported, not used by the
+decision rule.
 
 The truncated proposal is sampled by rejection from ``N(z_hat, C)``; where the optimum sits in a corner of the box
 with a wide posterior so that too few of ``_POOL`` proposals per draw fall inside, the rest come from a Gibbs
