@@ -344,14 +344,13 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     layout_held = make_layout(held, options.variables)
     layout_all = make_layout(cal + held, report_only=[v for v in MEASURABLE if v not in options.variables],
                              dropped=notes)
-    say(options.line())
-    for note in notes:
-        say(note)
     kind = "heldout" if layout_held.size else "leave_one_slug_out"
     if not layout_held.size and options.heldout_predictive == "sampled":
         notes.append("no held-out coreflood: the candidates are scored by leave-one-slug-out with the linearised "
                      "predictive (heldout_predictive = 'sampled' applies to held-out corefloods only)")
-        say(notes[-1])
+    say(options.line())
+    for note in notes:
+        say(note)
     slug_names = _slug_names(cal + held)
 
     ledger.enter("base calibration")
