@@ -230,6 +230,7 @@ def outcome(g, base: BaseModel, truth: dict, variables: tuple[str, ...]) -> dict
                                      for k in ("lower", "upper")],
         "where": _where(g, variables),
         "step0": _step0(g),
+        "heldout_weights": s["heldout_weights"], "heldout_unreliable": s["heldout_unreliable"],
     }
 
 

@@ -163,7 +163,8 @@ def run_one(source: str, case: str, seed: int, jobs: int, variant: str = "disper
             "dof": result["fit"]["dof"], "gap_closed": result["gap_closed"],
             "numerical_scale": ((result["numerical_error"] or {}).get("scale") or {}).get("estimate"),
             "forward_runs": result["forward_runs"], "diagnosis_s": diag.wall_time_s,
-            "wall_s": time.perf_counter() - start}
+            "heldout_predictive": diag.options.heldout_predictive, "heldout_weights": result["heldout_weights"],
+            "heldout_unreliable": result["heldout_unreliable"], "wall_s": time.perf_counter() - start}
 
 
 def classify(record: dict) -> str:

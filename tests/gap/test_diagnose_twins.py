@@ -75,6 +75,15 @@ def test_strong_capillary_pressure_twin_is_identified(tmp_path):
                       .run(StageContext("diagnose", verbose=False)))
     assert default["verdict"] == "effect" and default["ambiguity_set"] == ["capillary_pressure"]
     assert default["effects"][0]["strength"] == pytest.approx(1.0, rel=0.3)
+    # every sampled held-out score's weights are recorded, the base's and each refit's with the same k and ESS as
+    # its candidate row; the models past the reliability threshold are listed and named in a note, the others not
+    weights = default["heldout_weights"]
+    refitted = [r for r in default["ranked_effects"] if r["shortlisted"]]
+    assert "base" in weights and all(weights[f"base+{r['name']}"] == {"pareto_k": r["heldout_pareto_k"],
+                                                                      "ess": r["heldout_ess"]} for r in refitted)
+    over = sorted(m for m, v in weights.items() if v["pareto_k"] > 0.7)
+    assert default["heldout_unreliable"] == over
+    assert any("sampled held-out score is unreliable" in n for n in default["notes"]) == bool(over)
     # the rest of the checks on the same twin with the numerical-error term left out: data and model share their
     # numerics exactly here, so the spread over other grids is no error of these data; with the term in, the front
     # regions weigh less and the final model's Δp residual keeps a significant but 4x smaller correlation with the

@@ -58,7 +58,8 @@ from .observed import MEASURABLE, Experiment, load_experiments
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
 from .psis_loo import compare_loo, psis_loo
-from .sampled_predictive import HELDOUT_PREDICTIVES, sampled_predictive
+from .sampled_predictive import (HELDOUT_PREDICTIVES, PROPOSAL_CENTRES, RELIABLE_PARETO_K, sampled_predictive,
+                                 unreliable_weights_note)
 from .quantification import gap_closed, parameter_covariance, predictive_std, raw_jacobian
 from .signatures import predictive_pvalues, signatures
 from .subsets import SearchResult, SubsetFit, best_subset, subset_key
@@ -124,6 +125,10 @@ class Options:
     #: are linearised whatever this says (the run says so and the report's notes record it).
     heldout_predictive: str = "sampled"
     predictive_draws: int = 100
+    #: the sampled predictive's proposal mean: the calibrated optimum, or the minimiser of the Gauss-Newton model
+    #: of the calibration chi2 there (``"newton"``: corrects an optimum short of convergence or pressed against the
+    #: box; sampled_predictive.proposal_mean, docs/gap.md, Scores)
+    predictive_centre: str = "optimum"
 
     def as_dict(self) -> dict:
         """Every option as JSON values (the rule and the numerical variants as nested dicts)."""
@@ -213,6 +218,9 @@ class GapDiagnosis:
     closers: list[str] = field(default_factory=list)
     #: the reruns along other optimiser paths (``Options.path_reruns``), empty when not checked
     path_reruns: list[PathRerun] = field(default_factory=list)
+    #: model label -> (Pareto k, effective sample size) of every sampled held-out predictive the diagnosis scored
+    #: (``heldout_predictive = "sampled"``); those with ``k > RELIABLE_PARETO_K`` are named in ``notes``
+    heldout_weights: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     @property
     def dof(self) -> int:
@@ -322,6 +330,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     if options.heldout_predictive not in HELDOUT_PREDICTIVES:
         raise ParameterError(f"heldout_predictive = {options.heldout_predictive!r} is not allowed; allowed "
                              f"{list(HELDOUT_PREDICTIVES)}")
+    if options.predictive_centre not in PROPOSAL_CENTRES:
+        raise ParameterError(f"predictive_centre = {options.predictive_centre!r} is not allowed; allowed "
+                             f"{list(PROPOSAL_CENTRES)}")
     if not 20 <= options.predictive_draws <= 10000:
         raise ParameterError(f"predictive_draws = {options.predictive_draws!r} is out of range; allowed 20..10000 "
                              "(draws of the sampled held-out predictive)")
@@ -381,16 +392,19 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     pvalue = float(chi2.sf(base_fit.chi2, dof))
     say(f"base chi2 = {base_fit.chi2:.1f} on {dof} dof (p = {pvalue:.3g}); {predictor.runs} forward runs")
 
+    heldout_weights: dict[str, tuple[float, float]] = {}
+
     def held_out(f: Fit, shift: np.ndarray | None = None) -> Predictive:
         if options.heldout_predictive == "laplace":
             return predictive(predictor, layout_held, f, options.nuisance_scale, options.diff_step, shift=shift)
         problems = [WhitenedProblem(predictor, layout, f.candidates, len(base.parameters), options.diff_step)
                     for layout in (layout_fit, layout_held)]
         w = sampled_predictive(problems[0].residuals, problems[1].residuals, f, tau=options.nuisance_scale,
-                               draws=options.predictive_draws, seed=options.seed,
+                               draws=options.predictive_draws, seed=options.seed, centre=options.predictive_centre,
                                shift=None if shift is None else layout_held.whiten(shift))
         say(f"sampled held-out predictive of {_label(f)}: effective sample size {w.ess:.1f} of "
             f"{options.predictive_draws} draws, Pareto k {w.pareto_k:.2f}, Monte Carlo SE {w.mcse:.2f} nats")
+        heldout_weights[_label(f)] = (w.pareto_k, w.ess)
         return w
 
     def out_of_sample(f: Fit) -> Predictive:
@@ -591,6 +605,10 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     tried = {name: sc.strength for step in reversed(steps) for name, sc in step.scores.items()
              if name not in reference.strengths}
     say(f"verdict: {decided} {ambiguity}")
+    unreliable = {m: kw for m, kw in heldout_weights.items() if not kw[0] <= RELIABLE_PARETO_K}
+    if unreliable:
+        notes.append(unreliable_weights_note(unreliable, options.predictive_draws))
+        say(notes[-1])
     if "dispersion" in {*ambiguity, *reference.strengths}:  # named: declared, or in the set (then refitted: tried)
         strength = reference.strengths.get("dispersion", tried.get("dispersion"))
         notes.append(dispersion_note(strength, resolve_params(predictor.model(reference.u)[0])["ALPHAL1"]))
@@ -621,4 +639,4 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
                         gap_cells([c for c in base_view.cells if c.variable in options.variables], options.alpha),
                         time.perf_counter() - start, runs, chi2_measurement, numerical, scale, disc, w_disc, search,
                         pool, search_runs, tried, notes, ledger.table(), targeted,
-                        closers if decided == "unattributed" else [], reruns)
+                        closers if decided == "unattributed" else [], reruns, heldout_weights)

@@ -30,8 +30,10 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
   variants per block, unscaled) and the scale alone as the number ``numerical_scale``, ``discrepancy`` (the
   competitor's terms, calibration chi^2, held-out dELPD over the base), ``search`` (pool, subsets fitted,
   admissible, chosen, forward runs), ``notes`` (blocks left out of the report; the dispersivity a named dispersion
-  stands for) and ``path_reruns`` (the diagnosis rerun along other optimiser paths: difference step, verdict, set,
-  effects, forward runs, whether it agrees; :mod:`~spflow.plugins.gap.path_stability`) as JSON.
+  stands for; the models whose sampled held-out score is unreliable), ``heldout_weights`` (Pareto k and effective
+  sample size of every sampled held-out predictive, the base's included, by model) and ``path_reruns`` (the
+  diagnosis rerun along other optimiser paths: difference step, verdict, set, effects, forward runs, whether it
+  agrees; :mod:`~spflow.plugins.gap.path_stability`) as JSON.
 
 :func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
 """
@@ -51,6 +53,7 @@ from spflow.plugins.forward.stage import RESPONSE_UNITS
 from .diagnosis import GapDiagnosis, ModelView
 from .localisation import Cell
 from .quantification import block_rmse, coverage, gap_closed
+from .sampled_predictive import RELIABLE_PARETO_K
 from .signatures import SIGNATURE_UNITS
 from .verdict import passes
 
@@ -376,6 +379,8 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         **({} if g.numerical_scale is None else {"numerical_scale": g.numerical_scale.estimate}),
         "discrepancy": json.dumps(discrepancy),
         "notes": json.dumps(g.notes),
+        "heldout_weights": json.dumps({m: {"pareto_k": _f(k), "ess": _f(ess)}
+                                      for m, (k, ess) in g.heldout_weights.items()}),
         "path_reruns": json.dumps([r.as_dict() for r in g.path_reruns]),
         "accepted_steps": json.dumps(g.accepted),
         "final_model": g.final_label,
@@ -449,6 +454,7 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
                                     "gap_closed_heldout", "chi2_heldout_base", "chi2_heldout_final", "elpd_base",
                                     "elpd_final", "coverage_calibration_base", "coverage_calibration_final",
                                     "coverage_heldout_base", "coverage_heldout_final")}
+    weights = json.loads(r.attrs.get("heldout_weights", "{}"))
     return {
         "verdict": r.attrs["verdict"],
         "effects": json.loads(r.attrs["effects"]),
@@ -461,6 +467,9 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
         "numerical_error": json.loads(r.attrs.get("numerical_error", "null")),
         "discrepancy": json.loads(r.attrs.get("discrepancy", "null")),
         "notes": json.loads(r.attrs.get("notes", "[]")),
+        "heldout_weights": weights,
+        "heldout_unreliable": sorted(m for m, v in weights.items()
+                                     if v["pareto_k"] is None or v["pareto_k"] > RELIABLE_PARETO_K),
         "path_reruns": json.loads(r.attrs.get("path_reruns", "[]")),
         "final_model": r.attrs["final_model"],
         "score": r.attrs["score_kind"],

@@ -91,6 +91,9 @@ OPTION_PARAMS = {
                                     "per scored model; leave-one-slug-out scores are always linearised)"),
     "predictive_draws": Param(int, 100, bounds=(20, 10000),
                               doc="draws of the sampled held-out predictive (heldout_predictive = sampled)"),
+    "predictive_centre": Param(str, "optimum", choices=["optimum", "newton"],
+                               doc="mean of the sampled predictive's proposal: the calibrated optimum, or the "
+                                   "minimiser of the Gauss-Newton model of the calibration chi2 there"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
     "path_reruns": Param(int, 0, bounds=(0, 5),
                          doc="reruns of the whole diagnosis along other optimiser paths (difference step x1.1, "
@@ -138,7 +141,9 @@ class Diagnose(Stage):
     # 11: the heldout_predictive and predictive_draws options (the sampled posterior predictive, off by default)
     # 12: heldout_mcse (the sampled predictive's Monte Carlo error) in the report and summary.json
     # 13: heldout_predictive = "sampled" by default (the twin study's rule, docs/gap.md, Scores)
-    version = "13"
+    # 14: heldout_weights (Pareto k and ESS of every sampled held-out score) and the note naming unreliable ones;
+    #     the predictive_centre option
+    version = "14"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
