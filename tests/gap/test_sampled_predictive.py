@@ -157,9 +157,17 @@ def test_the_options_are_checked_before_any_work():
         diagnose(["no_such_file.nc"], ["other.nc"], base, options=Options(heldout_predictive="mcmc"))
     with pytest.raises(ParameterError, match=r"predictive_draws = 5 is out of range; allowed 20..10000"):
         diagnose(["no_such_file.nc"], ["other.nc"], base, options=Options(predictive_draws=5))
+    with pytest.raises(ParameterError, match=r"predictive_centre = 'mode' is not allowed; allowed "
+                                             r"\['optimum', 'newton'\]"):
+        diagnose(["no_such_file.nc"], ["other.nc"], base, options=Options(predictive_centre="mode"))
+    with pytest.raises(ParameterError, match=r"max_effects = 0 is out of range; allowed 1..5"):
+        diagnose(["no_such_file.nc"], ["other.nc"], base, options=Options(max_effects=0))
     with pytest.raises(ParameterError, match="heldout_predictive"):
         Diagnose(heldout_predictive="mcmc")
+    with pytest.raises(ParameterError, match="predictive_centre"):
+        Diagnose(predictive_centre="mode")
     assert Diagnose(heldout_predictive="sampled", predictive_draws=50).options.predictive_draws == 50
+    assert Diagnose(predictive_centre="newton").options.predictive_centre == "newton"
 
 
 def test_a_twin_the_linearised_predictive_leaves_unattributed_gets_its_truth():

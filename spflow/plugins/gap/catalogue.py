@@ -32,7 +32,10 @@ from spflow.plugins.forward.effects import EffectRegistry, default_registry
 
 from .base_model import unit_to_value, value_to_unit
 
-__all__ = ["CandidateEffect", "PHYSICAL_RANGES", "candidates_for"]
+__all__ = ["CandidateEffect", "MAX_EFFECTS", "PHYSICAL_RANGES", "candidates_for"]
+
+#: the most catalogue effects a diagnosis may add to its base model (the option max_effects)
+MAX_EFFECTS = 5
 
 #: name -> (physical lower, physical upper, log scale?, test strengths when off in the base)
 PHYSICAL_RANGES: dict[str, tuple[float, float, bool, tuple[float, ...]]] = {

@@ -42,7 +42,7 @@ from .base_calibration import calibrate_base
 from .base_model import BaseModel
 from .candidates import FIRST_STEP_REFITS, fingerprint_columns, refit, screen_order, shortlist
 from .cost import Cost, CostLedger
-from .catalogue import CandidateEffect, candidates_for
+from .catalogue import MAX_EFFECTS, CandidateEffect, candidates_for
 from .discrepancy import Discrepancy, fit_discrepancy
 from .dispersion_note import dispersion_note
 from .change_points import ChangePoint, change_points
@@ -315,6 +315,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     start = time.perf_counter()
     if not calibration:
         raise ParameterError("a diagnosis needs at least one calibration coreflood")
+    if not 1 <= options.max_effects <= MAX_EFFECTS:
+        raise ParameterError(f"max_effects = {options.max_effects!r} is out of range; allowed 1..{MAX_EFFECTS} "
+                             "(effects the search may add)")
     if not 0.0 <= options.numerical_scale_max <= 10.0:
         raise ParameterError(f"numerical_scale_max = {options.numerical_scale_max!r} is out of range; allowed "
                              "[0, 10] (the cap of the numerical-error scale)")

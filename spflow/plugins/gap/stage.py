@@ -25,7 +25,7 @@ from spflow.plugins.design.schemas import DESIGN
 from spflow.plugins.forward.numba_cache import source_digest
 
 from .base_model import TABLE_3_2_BASE, BaseModel
-from .catalogue import candidates_for
+from .catalogue import MAX_EFFECTS, candidates_for
 from .observed import MEASURABLE
 from .verdict import Rule
 
@@ -66,7 +66,7 @@ OPTION_PARAMS = {
     "expand_shortlist": Param(bool, True, doc="first step with first_step_refits = shortlist: while the gap is "
                                               "significant and no refit passes, refit the next candidates in "
                                               "screen order (shortlist at a time)"),
-    "max_effects": Param(int, 2, bounds=(1, 5),
+    "max_effects": Param(int, 2, bounds=(1, MAX_EFFECTS),
                          doc="effects in the final model at most (greedy and joint search; 3 finds three "
                              "coexisting effects)"),
     "subset_pool": Param(int, 4, bounds=(1, 8),
