@@ -184,21 +184,22 @@ def _truth_params(base: BaseModel, truth: dict) -> dict:
 
 def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], numerical_error: bool = True,
              first_round_jacobian: str = "difference", heldout_predictive: str = Options.heldout_predictive,
-             options_seed: int = 0) -> dict:
+             options_seed: int = 0, predictive_centre: str = Options.predictive_centre) -> dict:
     """Generate one twin, diagnose it blind (likelihood ``variables``; ``numerical_error=False``: without the
-    numerical-error term; ``first_round_jacobian``, ``heldout_predictive``, ``options_seed``: those options, the last
-    ``Options.seed``), and score the diagnosis against the truth."""
+    numerical-error term; ``first_round_jacobian``, ``heldout_predictive``, ``predictive_centre``, ``options_seed``:
+    those options, the last ``Options.seed``), and score the diagnosis against the truth."""
     start_cpu, start = time.process_time(), time.perf_counter()
     base, truth, data = twin(spec, cells, seed)
     snrs = _snr(base, truth, data[0], variables)
     options = Options(variables=variables, first_round_jacobian=first_round_jacobian,
-                      heldout_predictive=heldout_predictive, seed=options_seed,
+                      heldout_predictive=heldout_predictive, seed=options_seed, predictive_centre=predictive_centre,
                       **({} if numerical_error else {"numerical_variants": ()}))
     g = diagnose([data[0]], [data[1]], base, CATALOGUE, options)
     return {
         "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
         "numerical_error": numerical_error, "first_round_jacobian": first_round_jacobian,
         "heldout_predictive": heldout_predictive, "options_seed": options_seed,
+        "predictive_centre": predictive_centre,
         "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], **snrs,
         **outcome(g, base, truth, variables),
         "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
@@ -975,6 +976,9 @@ def main(argv=None) -> int:
                    help="diagnose without the numerical-error term (Options.numerical_variants = ())")
     p.add_argument("--first-round-jacobian", choices=("difference", "secant"), default="difference",
                    help="Options.first_round_jacobian of every diagnosis (docs/gap.md, Cost; default: difference)")
+    p.add_argument("--predictive-centre", choices=("optimum", "newton"), default=Options.predictive_centre,
+                   help="Options.predictive_centre of every diagnosis (docs/gap.md, Scores; default: the diagnosis's, "
+                        f"{Options.predictive_centre}; twins recorded without it used optimum)")
     p.add_argument("--heldout-predictive", choices=("laplace", "sampled"), default=Options.heldout_predictive,
                    help="Options.heldout_predictive of every diagnosis (docs/gap.md, Scores; default: the "
                         f"diagnosis's, {Options.heldout_predictive}; twins recorded without it used laplace)")
@@ -1009,7 +1013,7 @@ def main(argv=None) -> int:
         done = _records(file, args.cells)
         # (twins recorded before an option existed ran with the value named here)
         for option, default in (("first_round_jacobian", "difference"), ("heldout_predictive", "laplace"),
-                                ("options_seed", 0)):
+                                ("options_seed", 0), ("predictive_centre", "optimum")):
             wanted = getattr(args, option)
             mixed = {r.get(option, default) for r in done.values()} - {wanted}
             if mixed:
@@ -1022,7 +1026,8 @@ def main(argv=None) -> int:
         with file.open("a") as fh:
             for record in Parallel(n_jobs=args.jobs, return_as="generator")(
                     delayed(run_twin)(s, args.cells, seed, variables, not args.no_numerical_error,
-                                      args.first_round_jacobian, args.heldout_predictive, args.options_seed)
+                                      args.first_round_jacobian, args.heldout_predictive, args.options_seed,
+                                      args.predictive_centre)
                     for s, seed in todo):
                 fh.write(json.dumps(record) + "\n")
                 fh.flush()
