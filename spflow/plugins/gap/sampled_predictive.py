@@ -161,7 +161,7 @@ def unreliable_weights_note(unreliable: dict[str, tuple[float, float]], draws: i
     listed = "; ".join(f"{m} (k {k:.2f}, ESS {ess:.1f})"
                        for m, (k, ess) in sorted(unreliable.items(), key=lambda x: -x[1][0]))
     return (f"the sampled held-out score is unreliable for {len(unreliable)} model(s), Pareto k > "
-            f"{RELIABLE_PARETO_K} over {draws} draws: {listed}. Their scores rest on a few draws and their Monte "
-            "Carlo SE understates the error (docs/gap.md, Scores: at a large calibration misfit the forward model's "
-            "numerical jitter makes the calibration chi2 rough at the posterior's scale). Compare the verdict with "
-            "heldout_predictive = 'laplace' before relying on it")
+            f"{RELIABLE_PARETO_K} over {draws} draws: {listed}. Each rests on a few draws: its Monte Carlo SE "
+            "understates its error and another seed of the draws can change the ambiguity set (docs/gap.md, Scores: "
+            "a calibration chi2 rough at the posterior's scale, a fit short of its optimum or pressed on the "
+            "parameter box). Check the verdict with another seed, or with heldout_predictive = 'laplace'")
