@@ -219,7 +219,8 @@ class GapDiagnosis:
     #: the reruns along other optimiser paths (``Options.path_reruns``), empty when not checked
     path_reruns: list[PathRerun] = field(default_factory=list)
     #: model label -> (Pareto k, effective sample size) of every sampled held-out predictive the diagnosis scored
-    #: (``heldout_predictive = "sampled"``); those with ``k > RELIABLE_PARETO_K`` are named in ``notes``
+    #: (``heldout_predictive = "sampled"``; the discrepancy competitor's labelled so); those with
+    #: ``k > RELIABLE_PARETO_K`` are named in ``notes``
     heldout_weights: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     @property
@@ -405,9 +406,10 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         w = sampled_predictive(problems[0].residuals, problems[1].residuals, f, tau=options.nuisance_scale,
                                draws=options.predictive_draws, seed=options.seed, centre=options.predictive_centre,
                                shift=None if shift is None else layout_held.whiten(shift))
-        say(f"sampled held-out predictive of {_label(f)}: effective sample size {w.ess:.1f} of "
+        model = _label(f) + ("" if shift is None else " (discrepancy competitor)")
+        say(f"sampled held-out predictive of {model}: effective sample size {w.ess:.1f} of "
             f"{options.predictive_draws} draws, Pareto k {w.pareto_k:.2f}, Monte Carlo SE {w.mcse:.2f} nats")
-        heldout_weights[_label(f)] = (w.pareto_k, w.ess)
+        heldout_weights[model] = (w.pareto_k, w.ess)
         return w
 
     def out_of_sample(f: Fit) -> Predictive:
