@@ -52,6 +52,11 @@ def test_null_twin_is_not_flagged(tmp_path, capsys):
                  "--out", str(out)]) == 0
     result = json.loads((out / "summary.json").read_text())
     assert result["verdict"] == "none" and result["effects"] == [] and result["gap_cells"] == []
+    # the files carry their measurement model: recorded as the data's, and no note that one was assumed
+    measurement = result["settings"]["measurement"]
+    assert sorted(measurement) == ["BCF1", "BCF2"] and all(m["from_data"] for m in measurement.values())
+    assert measurement["BCF1"]["pressure_relative"] == NoiseModel().pressure_relative
+    assert not any("measurement model" in n for n in result["notes"])
     printed = capsys.readouterr().out.splitlines()  # the verdict table as text: title, header, one row
     verdict = printed.index("Verdict")
     assert printed[verdict + 1].split()[0] == "verdict" and printed[verdict + 2].split()[0] == "none"

@@ -54,7 +54,7 @@ from .localisation import Cell, cells, gap_cells, ljung_box
 from .numerical_error import DEFAULT_VARIANTS, NumericalSpread, Numerics, inflate, numerical_spread
 from .numerical_scale import NumericalScale, estimate_scale
 from .path_stability import MAX_RERUNS, PathRerun, rerun_paths
-from .observed import MEASURABLE, Experiment, load_experiments
+from .observed import MEASURABLE, Experiment, load_experiments, measurement_note
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
 from .psis_loo import compare_loo, psis_loo
@@ -345,6 +345,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     clash = sorted({e.name for e in cal} & {e.name for e in held})
     if clash:
         raise ParameterError(f"experiments {clash} are both calibration and held-out data")
+    assumed = measurement_note(cal + held)
+    if assumed:
+        notes.append(assumed)
     candidates = candidates_for(catalogue, base.effects)
     predictor = Predictor(base, cal + held, parallel)
     ledger = CostLedger(predictor)

@@ -28,7 +28,7 @@ from spflow.plugins.forward.run_arguments import common_grid, output_grid
 from spflow.plugins.observations import on_simulator_grid
 from spflow.synthetic import NoiseModel
 
-__all__ = ["Experiment", "load_experiments", "observed_experiment", "MEASURABLE"]
+__all__ = ["Experiment", "load_experiments", "measurement_note", "observed_experiment", "MEASURABLE"]
 
 #: variables a diagnosis can use (the simulator's responses that a lab measures)
 MEASURABLE = ("dp", "oil_cut", "recovery", "c_polymer_out", "c_surfactant_out", "salinity_out")
@@ -117,6 +117,23 @@ def load_experiments(sources: Sequence, pv_step: float, schedules: Mapping[str, 
     if len(set(names)) != len(names):
         raise ParameterError(f"experiments must have distinct names (attr 'experiment'), got {names}")
     return out
+
+
+def measurement_note(experiments: Sequence[Experiment]) -> str | None:
+    """The note naming the corefloods whose measurement model is not wholly in their data (``noise_*`` attrs, or
+    CSV header keys) and the model the likelihood then uses for each (the documented lab defaults where the data
+    are silent); ``None`` when every coreflood carries its own."""
+    assumed = [e for e in experiments if not e.noise_from_data]
+    if not assumed:
+        return None
+    models: dict[str, list[str]] = {}
+    for e in assumed:
+        text = ", ".join(f"{f.name} = {getattr(e.measurement, f.name):g}" for f in fields(NoiseModel))
+        models.setdefault(text, []).append(e.name)
+    used = "; ".join(f"{', '.join(names)}: {text}" for text, names in models.items())
+    return (f"the measurement model of {', '.join(e.name for e in assumed)} is not wholly in the data (noise_* attrs "
+            f"or CSV header keys; docs/data.md): where the data are silent the likelihood takes the documented lab "
+            f"defaults (spflow.synthetic.NoiseModel). Used: {used}")
 
 
 def observed_experiment(observations: xr.Dataset, name: str) -> Experiment:

@@ -33,7 +33,8 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
   stands for; the models whose sampled held-out score is unreliable), ``heldout_weights`` (Pareto k and effective
   sample size of every sampled held-out predictive, the base's included, by model) and ``path_reruns`` (the
   diagnosis rerun along other optimiser paths: difference step, verdict, set, effects, forward runs, whether it
-  agrees; :mod:`~spflow.plugins.gap.path_stability`) as JSON.
+  agrees; :mod:`~spflow.plugins.gap.path_stability`) and ``measurement`` (per coreflood the measurement model the
+  likelihood used and whether the data gave it) as JSON.
 
 :func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
 """
@@ -41,6 +42,7 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 
 import numpy as np
 import xarray as xr
@@ -390,7 +392,8 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         "alpha": g.options.alpha,
         "cells": g.base.cells,
         "pv_step": g.options.pv_step,
-        "noise_from_data": json.dumps({e.name: e.noise_from_data for e in experiments}),
+        "measurement": json.dumps({e.name: {"from_data": e.noise_from_data, **asdict(e.measurement)}
+                                   for e in experiments}),
         "forward_runs": g.forward_runs,
         "options": json.dumps(g.options.as_dict()),   # every option as it ran, the decision rule included
         "scheme": g.base.scheme,
@@ -489,6 +492,7 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
         "forward_runs": int(r.attrs["forward_runs"]),
         # how the diagnosis ran: every option, and the base model's numerics (absent from reports written before)
         "settings": {"options": json.loads(r.attrs.get("options", "null")), "cells": int(r.attrs["cells"]),
+                     "measurement": json.loads(r.attrs.get("measurement", "null")),
                      "scheme": r.attrs.get("scheme"),
                      "simulator_pv_step": _f(r.attrs["simulator_pv_step"]) if "simulator_pv_step" in r.attrs
                      else None},
