@@ -142,7 +142,7 @@ class Diagnose(Stage):
     # 12: heldout_mcse (the sampled predictive's Monte Carlo error) in the report and summary.json
     # 13: heldout_predictive = "sampled" by default (the twin study's rule, docs/gap.md, Scores)
     # 14: heldout_weights (Pareto k and ESS of every sampled held-out score) and the note naming unreliable ones;
-    #     the predictive_centre option
+    #     the predictive_centre option; each coreflood's measurement model in the report (and a note when assumed)
     version = "14"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
