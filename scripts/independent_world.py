@@ -274,13 +274,17 @@ def write_report(records: list[dict], out: Path, store: Path, baseline: tuple[st
                   "(targets >= 90 %, <= 2)",
                   f"- all three named when three are withheld: {m['all_three_named']} of {m['triple_runs']} "
                   "(target >= 2 of 3 seeds)", "",
-                  "| case | seed | verdict | named (strength) | ambiguity set | base chi2 / dof | forward runs | "
-                  "diagnosis s |", "|---|---|---|---|---|---|---|---|"]
+                  "| case | seed | verdict | named (strength) | ambiguity set | base chi2 / dof | "
+                  "sampled scores with Pareto k > 0.7 | forward runs | diagnosis s |",
+                  "|---|---|---|---|---|---|---|---|---|"]
         for r in sorted(rows, key=lambda r: (list(CASES).index(r["case"]), r["seed"])):
             named = ", ".join(f"{k} ({v:.3g})" for k, v in r["strengths"].items()) or "-"
+            # (records from before the weights were recorded, or with linearised scores: "-")
+            unreliable = (f"{len(r['heldout_unreliable'])} of {len(r['heldout_weights'])}"
+                          if r.get("heldout_weights") else "-")
             lines.append(f"| {r['case']} | {r['seed']} | {r['verdict']} | {named} | "
                          f"{', '.join(r['ambiguity_set']) or '-'} | {r['chi2_base']:.0f} / {r['dof']:.0f} | "
-                         f"{r['forward_runs']} | {r['diagnosis_s']:.0f} |")
+                         f"{unreliable} | {r['forward_runs']} | {r['diagnosis_s']:.0f} |")
         lines.append("")
     extra = {}
     if baseline is not None:
