@@ -32,11 +32,17 @@ examples*, ch. 9), ``var(p_hat) ~ sum_k w_k^2 (L_k - p_hat)^2``; on the log scal
 independent (the Gibbs top-up's are correlated) and ignores the Pareto smoothing; it is reported, not used by the
 decision rule.
 
-The truncated proposal is sampled by rejection from ``N(z_hat, C)``; where the optimum sits in a corner of the box
+The truncated proposal is sampled by rejection from ``N(m, C)``; where the mean sits in a corner of the box
 with a wide posterior so that too few of ``_POOL`` proposals per draw fall inside, the rest come from a Gibbs
 sampler of the same truncated normal (each coordinate from its conditional normal truncated to [0, 1]; Geweke
-1991), started at the optimum. Both give draws of one density whose normalising constant cancels in the
-self-normalised weights, ``-log q = (z - z_hat)' C^-1 (z - z_hat) / 2``. The estimate is only as good as the
+1991), started at the proposal's mean clipped to the box. Both give draws of one density whose normalising constant
+cancels in the self-normalised weights, ``-log q = (z - m)' C^-1 (z - m) / 2`` with ``m`` the proposal's mean: the
+optimum ``z_hat``, or with ``centre = "newton"`` the minimiser of the Gauss-Newton model of the calibration chi2 at
+the fit, ``m = z_hat - C J'r`` (``J``, ``r`` the fit's whitened Jacobian and residuals; outside the box when the
+gradient presses the fit on a face, where the truncation then piles the draws). The optimiser stops short of the
+optimum on a calibration chi2 that the forward model's jitter makes rough, and a fit on a face with a large
+gradient has its posterior within ``~1/g`` of the face: a proposal centred on ``z_hat`` then sits several posterior
+sd off the mode and the weights degenerate (docs/gap.md, Scores). The estimate is only as good as the
 proposal covers the posterior: its effective sample size ``1 / sum w_k^2`` and the Pareto ``k`` of the weights
 (``k > 0.7``: unreliable) are returned with it, and the Monte Carlo error of the log predictive. Coordinate
 ``j``'s standard normals come from the stream ``(seed, j)``, so models sharing calibrated parameters share their
@@ -66,7 +72,7 @@ HELDOUT_PREDICTIVES = ("laplace", "sampled")
 #: where the sampled predictive's proposal is centred: at the optimum, or at its Gauss-Newton model's minimiser
 PROPOSAL_CENTRES = ("optimum", "newton")
 
-#: above this Pareto k of the importance weights the estimate is unreliable (Vehtari et al. 2024, Sec. 3)
+#: above this Pareto k of the importance weights the estimate is unreliable (Vehtari et al. 2024)
 RELIABLE_PARETO_K = 0.7
 
 #: proposals drawn per requested draw before the truncation to the unit box
