@@ -40,9 +40,9 @@ cancels in the self-normalised weights, ``-log q = (z - m)' C^-1 (z - m) / 2`` w
 optimum ``z_hat``, or with ``centre = "newton"`` the minimiser of the Gauss-Newton model of the calibration chi2 at
 the fit, ``m = z_hat - C J'r`` (``J``, ``r`` the fit's whitened Jacobian and residuals; outside the box when the
 gradient presses the fit on a face, where the truncation then piles the draws). The optimiser stops short of the
-optimum on a calibration chi2 made rough by the forward model's jumps in the parameters, and a fit on a face with a large
-gradient has its posterior within ``~1/g`` of the face: a proposal centred on ``z_hat`` then sits several posterior
-sd off the mode and the weights degenerate (docs/gap.md, Scores). The estimate is only as good as the
+optimum on a calibration chi2 made rough by the forward model's jumps in the parameters, and a fit on a face with a
+large gradient has its posterior within ``~1/g`` of the face: a proposal centred on ``z_hat`` then sits several
+posterior sd off the mode and the weights degenerate (docs/gap.md, Scores). The estimate is only as good as the
 proposal covers the posterior: its effective sample size ``1 / sum w_k^2`` and the Pareto ``k`` of the weights
 (``k > 0.7``: unreliable) are returned with it, and the Monte Carlo error of the log predictive. Coordinate
 ``j``'s standard normals come from the stream ``(seed, j)``, so models sharing calibrated parameters share their
