@@ -58,7 +58,7 @@ from .observed import MEASURABLE, Experiment, load_experiments, measurement_note
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
 from .psis_loo import compare_loo, psis_loo
-from .sampled_predictive import (HELDOUT_PREDICTIVES, PROPOSAL_CENTRES, RELIABLE_PARETO_K, sampled_predictive,
+from .sampled_predictive import (HELDOUT_PREDICTIVES, PROPOSAL_CENTRES, is_unreliable, sampled_predictive,
                                  unreliable_weights_note)
 from .quantification import gap_closed, parameter_covariance, predictive_std, raw_jacobian
 from .signatures import predictive_pvalues, signatures
@@ -613,7 +613,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     tried = {name: sc.strength for step in reversed(steps) for name, sc in step.scores.items()
              if name not in reference.strengths}
     say(f"verdict: {decided} {ambiguity}")
-    unreliable = {m: kw for m, kw in heldout_weights.items() if not kw[0] <= RELIABLE_PARETO_K}
+    unreliable = {m: kw for m, kw in heldout_weights.items() if is_unreliable(kw[0])}
     if unreliable:
         notes.append(unreliable_weights_note(unreliable, options.predictive_draws))
         say(notes[-1])

@@ -55,7 +55,7 @@ from spflow.plugins.forward.stage import RESPONSE_UNITS
 from .diagnosis import GapDiagnosis, ModelView
 from .localisation import Cell
 from .quantification import block_rmse, coverage, gap_closed
-from .sampled_predictive import RELIABLE_PARETO_K
+from .sampled_predictive import is_unreliable
 from .signatures import SIGNATURE_UNITS
 from .verdict import passes
 
@@ -471,8 +471,7 @@ def summary(report: xr.Dataset, top_cells: int = 10) -> dict:
         "discrepancy": json.loads(r.attrs.get("discrepancy", "null")),
         "notes": json.loads(r.attrs.get("notes", "[]")),
         "heldout_weights": weights,
-        "heldout_unreliable": sorted(m for m, v in weights.items()
-                                     if v["pareto_k"] is None or v["pareto_k"] > RELIABLE_PARETO_K),
+        "heldout_unreliable": sorted(m for m, v in weights.items() if is_unreliable(v["pareto_k"])),
         "path_reruns": json.loads(r.attrs.get("path_reruns", "[]")),
         "final_model": r.attrs["final_model"],
         "score": r.attrs["score_kind"],

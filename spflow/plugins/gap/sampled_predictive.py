@@ -64,8 +64,8 @@ from .least_squares import Fit
 from .predictive_scores import Predictive
 from .quantification import parameter_covariance
 
-__all__ = ["HELDOUT_PREDICTIVES", "PROPOSAL_CENTRES", "RELIABLE_PARETO_K", "mixture_terms", "posterior_draws",
-           "proposal_mean", "sampled_predictive", "unreliable_weights_note"]
+__all__ = ["HELDOUT_PREDICTIVES", "PROPOSAL_CENTRES", "RELIABLE_PARETO_K", "is_unreliable", "mixture_terms",
+           "posterior_draws", "proposal_mean", "sampled_predictive", "unreliable_weights_note"]
 
 #: held-out predictive distributions of a calibrated model: linearised at the optimum, or sampled (module docstring)
 HELDOUT_PREDICTIVES = ("laplace", "sampled")
@@ -83,15 +83,20 @@ _BURN_IN, _THIN = 20, 2
 Residuals = Callable[[list[np.ndarray]], list[np.ndarray]]
 
 
-def proposal_mean(fitted: Fit, tau: float, centre: str) -> np.ndarray:
+def proposal_mean(fitted: Fit, cov: np.ndarray, centre: str) -> np.ndarray:
     """The proposal's mean: the optimum ``z_hat`` (``centre = "optimum"``), or the minimiser of the Gauss-Newton
-    model of the calibration chi2 there, ``z_hat - C J'r`` (``"newton"``; module docstring), not restricted to the
-    box."""
+    model of the calibration chi2 there, ``z_hat - C J'r`` with ``C = cov`` (``"newton"``; module docstring), not
+    restricted to the box."""
     if centre == "optimum":
         return fitted.z
     ok = np.all(np.isfinite(fitted.jacobian), axis=1) & np.isfinite(fitted.residual)
-    jac = fitted.jacobian[ok]
-    return fitted.z - parameter_covariance(jac, tau) @ (jac.T @ fitted.residual[ok])
+    return fitted.z - cov @ (fitted.jacobian[ok].T @ fitted.residual[ok])
+
+
+def is_unreliable(pareto_k: float | None) -> bool:
+    """Whether importance weights with this Pareto k give an unreliable estimate (``k > RELIABLE_PARETO_K``; an
+    undefined k -- NaN, or ``None`` as a report stores it -- counts as unreliable)."""
+    return pareto_k is None or not pareto_k <= RELIABLE_PARETO_K
 
 
 def posterior_draws(fitted: Fit, tau: float, draws: int, seed: int, pool: int = _POOL,
@@ -101,7 +106,7 @@ def posterior_draws(fitted: Fit, tau: float, draws: int, seed: int, pool: int = 
     and ``-log q`` of each up to a constant (module docstring)."""
     ok = np.all(np.isfinite(fitted.jacobian), axis=1)
     cov = parameter_covariance(fitted.jacobian[ok], tau)
-    mean = proposal_mean(fitted, tau, centre)
+    mean = proposal_mean(fitted, cov, centre)
     factor = cholesky(cov, lower=True)
     q = factor.shape[0]
     e = np.column_stack([np.random.default_rng([seed, j]).standard_normal(pool * draws) for j in range(q)])
