@@ -219,7 +219,7 @@ class GapDiagnosis:
     #: the reruns along other optimiser paths (``Options.path_reruns``), empty when not checked
     path_reruns: list[PathRerun] = field(default_factory=list)
     #: model label -> (Pareto k, effective sample size) of every sampled held-out predictive the diagnosis scored
-    #: (``heldout_predictive = "sampled"``; the discrepancy competitor's labelled so); those with
+    #: (``heldout_predictive = "sampled"``; the discrepancy competitor shares the base's); those with
     #: ``k > RELIABLE_PARETO_K`` are named in ``notes``
     heldout_weights: dict[str, tuple[float, float]] = field(default_factory=dict)
 
@@ -412,7 +412,8 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         model = _label(f) + ("" if shift is None else " (discrepancy competitor)")
         say(f"sampled held-out predictive of {model}: effective sample size {w.ess:.1f} of "
             f"{options.predictive_draws} draws, Pareto k {w.pareto_k:.2f}, Monte Carlo SE {w.mcse:.2f} nats")
-        heldout_weights[model] = (w.pareto_k, w.ess)
+        if shift is None:  # (the competitor shifts the base's draws: same weights, same k and ESS)
+            heldout_weights[model] = (w.pareto_k, w.ess)
         return w
 
     def out_of_sample(f: Fit) -> Predictive:
