@@ -468,7 +468,6 @@ def _mobilities(st, pr, prm, n):
         pr[L.LWO, i] = 0.0
         pr[L.DCAP, i] = 0.0
         pr[L.DPCDS, i] = 0.0
-        pr[L.FW, i] = 0.0
         if prm[K.PC0] > 0.0 and pcx > 0:
             sbar_w = pr[L.SBAR + pcx - 1, i]
             window = pr[L.WINDOW, i]
@@ -478,7 +477,6 @@ def _mobilities(st, pr, prm, n):
             lo = lam1
             if lw + lo > 0.0:
                 pr[L.LWO, i] = lw * lo / (lw + lo)
-            pr[L.FW, i] = lw / lam_t
             if sbar_w > 0.0 and window > 0.0 and sbar_w ** (-1.0 / prm[K.EPC0]) < LEVERETT_FACTOR_MAX:
                 dpc = pc / (prm[K.EPC0] * sbar_w * window)
                 pr[L.DPCDS, i] = dpc

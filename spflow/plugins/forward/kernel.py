@@ -9,7 +9,7 @@ Per step (all in pore-volume units, see ``transport``):
    the step lands on;
 3. pressure: incompressible flow at a constant injection rate with the producer at constant pressure makes the
    total Darcy velocity uniform, so the implicit pressure equation reduces to the integral of ``u / (k lambda_T)``
-   over the cells (plus the capillary term when Pc is on) -- ``transport.pressure_profile``;
+   over the cells (with Pc on: the global pressure) -- ``transport.pressure_profile``;
 4. time step: ``dt = cfl dx / max_i speed_i`` (advective CFL from the local wave-speed bound); with Pc, by the
    capillary mode (``state_layout.CAP_*``): the explicit flux adds the diffusion limit ``+ 2 max_i D_cap,i / dx^2``
    to the rate; the implicit step is at most the step at which the step-start capillary fluxes change a cell's

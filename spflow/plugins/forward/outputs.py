@@ -18,7 +18,7 @@ _AVG = "average over the pv interval (previous grid point, pv]; at pv = 0 the in
 _POINT = "point value at pv"
 
 _SERIES = (
-    ("dp", R.DP, "Pa", "pressure drop |P_inj - P_prod|", _POINT, 1.0),
+    ("dp", R.DP, "Pa", "pressure drop |P_inj - P_prod| (of the global pressure when Pc is on)", _POINT, 1.0),
     ("oil_cut", R.OIL_CUT, "1", "oil cut (oil volume fraction of the effluent)", _AVG, 1.0),
     ("recovery", R.RECOVERY, "1", "cumulative oil recovery, fraction of OOIP (0 if OOIP = 0)", _POINT, 1.0),
     ("c_polymer_out", R.CP_OUT, "ppm", "effluent polymer concentration in the polymer-carrying phase", _AVG,
@@ -39,7 +39,7 @@ PROFILE_VARIABLES = (
     ("c_surfactant", KR.P_CS, "ppm", "surfactant in the fluid, by volume per pore volume (overall)",
      units.volume_fraction_to_surfactant_ppm(1.0)),
     ("salinity", KR.P_SAL, "ppm", "salinity (TDS) of the water", units.anions_to_tds_ppm(1.0)),
-    ("pressure", KR.P_PRES, "Pa", "pressure above the producer (oleic phase when Pc is on)", 1.0),
+    ("pressure", KR.P_PRES, "Pa", "pressure above the producer (the global pressure when Pc is on)", 1.0),
     ("surfactant_adsorbed", KR.P_ADS3, "ppm", "adsorbed surfactant, by volume per pore volume",
      units.volume_fraction_to_surfactant_ppm(1.0)),
     ("polymer_adsorbed", KR.P_ADS4, "ppm", "adsorbed polymer, wt-ppm x pore volume per pore volume",

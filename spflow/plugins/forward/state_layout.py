@@ -26,23 +26,23 @@ S1 = 0  # saturations S1, S2, S3 at S1 + l - 1
 F1 = 3  # fractional flows f1, f2, f3
 C2P = 6  # oil fraction of phase l at C2P + l - 1
 C3P = 9  # surfactant fraction of phase l at C3P + l - 1
-CP, PCX, C5, C6, LAMT, SPEED, KW, KS, KP, PCAP, LWO, DCAP, SPC, PTYPE, FW, WAVE = range(12, 28)
-V1 = 28  # interstitial velocity f_l / S_l of phase l at V1 + l - 1 (PV units)
-IFT = 31  # largest IFT between the ME and an excess phase present (oil-water without ME; 0 single ME), mN/m
-C1P = 32  # water fraction of phase l at C1P + l - 1
-CSEP = 35  # polymer effective salinity of the carrier phase (Eq. 2.3), meq/ml
-SIGW = 36  # IFT between the polymer carrier and the oleic phase (capillary pressure), mN/m
+CP, PCX, C5, C6, LAMT, SPEED, KW, KS, KP, PCAP, LWO, DCAP, SPC, PTYPE, WAVE = range(12, 27)
+V1 = 27  # interstitial velocity f_l / S_l of phase l at V1 + l - 1 (PV units)
+IFT = 30  # largest IFT between the ME and an excess phase present (oil-water without ME; 0 single ME), mN/m
+C1P = 31  # water fraction of phase l at C1P + l - 1
+CSEP = 34  # polymer effective salinity of the carrier phase (Eq. 2.3), meq/ml
+SIGW = 35  # IFT between the polymer carrier and the oleic phase (capillary pressure), mN/m
 # rel-perm inputs and results of phase l at ROW + l - 1 (passes of ``cell_properties``)
-KR = 37  # end point k_rl^0 (Eq. 2.13), then k_rl (Eq. 2.14)
-DKR = 40  # dk_rl / dS_l
-NEXP = 43  # Corey exponent n_l (Eq. 2.13)
-SBAR = 46  # normalized saturation (Eq. 1.7), 0 for an absent phase
-WINDOW = 49  # 1 - S1r - S2r - S3r
-DPCDS = 50  # |dPc/dS| of the carrier (wetting) phase saturation (Pa), 0 where Pc is off or capped
-WAVE_R = 51  # the release phase's term of the wave-speed bound: its row sum of |df_k/dS_l| (PV units)
-SPEED_X = 52  # the step's speed bound without the release phase's Jacobian column (``SPEED >= max(SPEED_X, WAVE_R)``)
-REL = 53  # the release phase (0 aqueous, 1 oleic, 2 microemulsion): the present phase with the largest dlambda/dS
-NPR = 54
+KR = 36  # end point k_rl^0 (Eq. 2.13), then k_rl (Eq. 2.14)
+DKR = 39  # dk_rl / dS_l
+NEXP = 42  # Corey exponent n_l (Eq. 2.13)
+SBAR = 45  # normalized saturation (Eq. 1.7), 0 for an absent phase
+WINDOW = 48  # 1 - S1r - S2r - S3r
+DPCDS = 49  # |dPc/dS| of the carrier (wetting) phase saturation (Pa), 0 where Pc is off or capped
+WAVE_R = 50  # the release phase's term of the wave-speed bound: its row sum of |df_k/dS_l| (PV units)
+SPEED_X = 51  # the step's speed bound without the release phase's Jacobian column (``SPEED >= max(SPEED_X, WAVE_R)``)
+REL = 52  # the release phase (0 aqueous, 1 oleic, 2 microemulsion): the present phase with the largest dlambda/dS
+NPR = 53
 
 # error codes returned by the kernel
 OK = 0
