@@ -91,9 +91,9 @@ OPTION_PARAMS = {
                                     "per scored model; leave-one-slug-out scores are always linearised)"),
     "predictive_draws": Param(int, 100, bounds=(20, 10000),
                               doc="draws of the sampled held-out predictive (heldout_predictive = sampled)"),
-    "predictive_centre": Param(str, "optimum", choices=["optimum", "newton"],
-                               doc="mean of the sampled predictive's proposal: the calibrated optimum, or the "
-                                   "minimiser of the Gauss-Newton model of the calibration chi2 there"),
+    "predictive_centre": Param(str, "newton", choices=["optimum", "newton"],
+                               doc="mean of the sampled predictive's proposal: the minimiser of the Gauss-Newton "
+                                   "model of the calibration chi2 at the calibrated optimum, or the optimum itself"),
     "starts": Param(int, 1, bounds=(1, 50), doc="base-calibration starts (defaults + Latin-hypercube points)"),
     "path_reruns": Param(int, 0, bounds=(0, 5),
                          doc="reruns of the whole diagnosis along other optimiser paths (difference step x1.1, "
@@ -143,7 +143,9 @@ class Diagnose(Stage):
     # 13: heldout_predictive = "sampled" by default (the twin study's rule, docs/gap.md, Scores)
     # 14: heldout_weights (Pareto k and ESS of every sampled held-out score) and the note naming unreliable ones;
     #     the predictive_centre option; each coreflood's measurement model in the report (and a note when assumed)
-    version = "14"
+    # 15: predictive_centre = "newton" by default (its twin rule passed, v10n; docs/gap.md, Scores); the forward
+    #     model's dp is the global pressure's (its source digest keys this stage too)
+    version = "15"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
