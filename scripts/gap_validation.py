@@ -58,6 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from spflow.plugins.forward.effects import BUILTIN_EFFECTS
+from spflow.plugins.forward.numba_cache import source_digest
 from spflow.plugins.forward.schedule import as_schedule
 from spflow.plugins.gap.base_model import TABLE_3_2_BASE, BaseModel
 from spflow.plugins.gap.catalogue import candidates_for
@@ -199,7 +200,7 @@ def run_twin(spec: dict, cells: int, seed: int, variables: tuple[str, ...], nume
         "id": spec["id"], "scenario": spec["scenario"], "seed": seed, "cells": cells, "variables": list(variables),
         "numerical_error": numerical_error, "first_round_jacobian": first_round_jacobian,
         "heldout_predictive": heldout_predictive, "options_seed": options_seed,
-        "predictive_centre": predictive_centre,
+        "predictive_centre": predictive_centre, "forward_digest": source_digest()[:16],
         "truth_effects": truth["effects"], "truth_fixed": truth["fixed"], **snrs,
         **outcome(g, base, truth, variables),
         "forward_runs": g.forward_runs, "wall_s": time.perf_counter() - start,
@@ -1019,6 +1020,12 @@ def main(argv=None) -> int:
             if mixed:
                 raise SystemExit(f"{file} holds twins diagnosed with {option} = {sorted(mixed)}; resume them with "
                                  f"that option, or give another --results for {wanted!r}")
+        # nor twins made and diagnosed by another forward model (the digest of its sources; none recorded before
+        # session 21): their data and predictions would mix two simulators
+        other = {r.get("forward_digest") for r in done.values()} - {source_digest()[:16]}
+        if other:
+            raise SystemExit(f"{file} holds twins made by another forward model (source digests "
+                             f"{sorted(map(str, other))}, this one {source_digest()[:16]}); give another --results")
         todo = [(s, args.seed + 1000 * i) for s, i in select(specs, args.only) if s["id"] not in done]
         print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
         from joblib import Parallel, delayed

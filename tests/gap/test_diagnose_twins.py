@@ -105,10 +105,12 @@ def test_strong_capillary_pressure_twin_is_identified(tmp_path):
     assert result["gap_cells"], "a strong effect leaves significant gap cells in the base model"
     ranked = {r["name"]: r for r in result["ranked_effects"]}
     assert ranked["capillary_pressure"]["passes"] and not ranked.get("dispersion", {}).get("passes", False)
-    # where: the base model's Δp residual on the calibration flood follows an injected channel, the final's does not
+    # where: the base model's Δp residual follows an injected channel, the final's on no flood (since dp is the
+    # global pressure's, the one that follows is the held-out BCF2's; the calibration flood's followed only through
+    # the old phase-pressure term, docs/forward_model.md)
     def follows(model):
         return [i for i in range(report.sizes["input_correlation"]) if report["xcorr_variable"].values[i] == "dp"
-                and report["xcorr_experiment"].values[i] == "BCF1" and report["xcorr_significant"].values[model, i]]
+                and report["xcorr_significant"].values[model, i]]
     assert follows(0) and not follows(1)
     assert all(c["slug"] in ("IWF", "HTDS", "SP", "P", "EWF") and c["pvalue"] < 0.01 for c in result["change_points"])
     # the final model's held-out predictive intervals cover at least as well as the base model's

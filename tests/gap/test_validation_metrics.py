@@ -181,3 +181,22 @@ def test_step0_rows_say_which_test_stopped_a_candidate():
     beaten = CandidateScore(**{**score.__dict__, "competitor_delta": 25.0})
     step.scores = {"dispersion": beaten}
     assert gv._step0(g)[0]["passes"] is True
+
+
+def test_a_study_made_by_another_forward_model_is_not_resumed(tmp_path):
+    """Twins recorded with another forward model's source digest (or none, as before it was recorded) are not mixed
+    with new ones: resuming stops before any diagnosis and names both digests."""
+    import json
+
+    from spflow.plugins.forward.numba_cache import source_digest
+
+    old = dict(record("null", 0.0, "none"), id="null#0", heldout_predictive="sampled", predictive_centre="newton",
+               first_round_jacobian="difference", options_seed=0)
+    for digest in (None, "0123456789abcdef"):
+        row = old if digest is None else dict(old, forward_digest=digest)
+        (tmp_path / "dp_oil.jsonl").write_text(json.dumps(row) + "\n")
+        with pytest.raises(SystemExit, match=rf"another forward model .*{source_digest()[:16]}"):
+            gv.main(["--results", str(tmp_path), "--only", "null#1"])
+    # the current digest resumes (here: nothing left to run but the report of the one record)
+    (tmp_path / "dp_oil.jsonl").write_text(json.dumps(dict(old, forward_digest=source_digest()[:16])) + "\n")
+    assert gv.main(["--results", str(tmp_path), "--only", "null#0"]) in (0, None)
