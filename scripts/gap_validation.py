@@ -1022,10 +1022,11 @@ def main(argv=None) -> int:
                                  f"that option, or give another --results for {wanted!r}")
         # nor twins made and diagnosed by another forward model (the digest of its sources; none recorded before
         # session 21): their data and predictions would mix two simulators
-        other = {r.get("forward_digest") for r in done.values()} - {source_digest()[:16]}
+        digest = source_digest()[:16]
+        other = {r.get("forward_digest") for r in done.values()} - {digest}
         if other:
             raise SystemExit(f"{file} holds twins made by another forward model (source digests "
-                             f"{sorted(map(str, other))}, this one {source_digest()[:16]}); give another --results")
+                             f"{sorted(map(str, other))}, this one {digest}); give another --results")
         todo = [(s, args.seed + 1000 * i) for s, i in select(specs, args.only) if s["id"] not in done]
         print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
         from joblib import Parallel, delayed

@@ -2,10 +2,13 @@
 and the truth-strength draws (inside the physical range, never close to the base strength)."""
 
 import importlib.util
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from spflow.plugins.forward.numba_cache import source_digest
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "gap_validation.py"
 spec = importlib.util.spec_from_file_location("gap_validation", SCRIPT)
@@ -186,10 +189,6 @@ def test_step0_rows_say_which_test_stopped_a_candidate():
 def test_a_study_made_by_another_forward_model_is_not_resumed(tmp_path):
     """Twins recorded with another forward model's source digest (or none, as before it was recorded) are not mixed
     with new ones: resuming stops before any diagnosis and names both digests."""
-    import json
-
-    from spflow.plugins.forward.numba_cache import source_digest
-
     old = dict(record("null", 0.0, "none"), id="null#0", heldout_predictive="sampled", predictive_centre="newton",
                first_round_jacobian="difference", options_seed=0)
     for digest in (None, "0123456789abcdef"):
