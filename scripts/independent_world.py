@@ -4,7 +4,7 @@ The data come from two simulators other than the diagnosis's base model (spflow,
 
 * ``opm`` — OPM Flow 2022.10 (fully implicit, first-order upwind, its own tabulated properties) on the deck that
   :func:`spflow.export.opm_deck.write_opm_deck` writes, 100 cells, time steps capped at ``OPM_MAX_STEP_PV`` (its
-  converged answer: see there; skipped with a message when ``flow`` is absent);
+  converged answer: see there; recorded in every record; skipped with a message when ``flow`` is absent);
 * ``upwind_fine`` — spflow itself at very different numerics: first-order upwind on 400 cells.
 
 The world is a Berea-like core (spflow's default core, fluids and Corey curves at the truth's relative-permeability
@@ -45,7 +45,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from spflow.export.opm_deck import write_opm_deck
+from spflow.export.opm_deck import DEFAULT_MAX_STEP_PV, write_opm_deck
 from spflow.export.opm_run import run_opm
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.schedule import Schedule, Slug
@@ -93,12 +93,13 @@ MAX_EFFECTS = {"dispersion_off": 2, "dispersion_calibrated": 3}
 SOURCES = {"opm": 100, "upwind_fine": 400}
 BASE_CELLS = 60
 PV_STEP = 0.01
-# OPM Flow's time steps are capped at this many PV: with its own step control (up to a report step, 0.01 PV) the
-# fully implicit scheme's time error dominated the data -- the pre-breakthrough dp of the null flood PF3 at 0.3 PV
-# reads 9406 Pa, and 8983 / 8858 / 8785 / 8746 Pa with steps capped at 0.004 / 0.002 / 0.001 / 0.0005 PV (first
-# order: the limit is about 8707 Pa); a real core has no time-step error, so the data take the converged steps
-# (the remaining time error about 0.5 %, below the 2 % transducer noise; docs/independent_world_v6.md)
-OPM_MAX_STEP_PV = 0.0005
+# OPM Flow's time steps are capped at this many PV (the library's default): with OPM's own step control (up to a
+# report step, 0.01 PV) the fully implicit scheme's time error dominated the data (the pre-breakthrough dp of the
+# null flood PF3 at 0.3 PV 8 % high; spflow.export.opm_deck.DEFAULT_MAX_STEP_PV, docs/independent_world_v6.md); a
+# real core has no time-step error, so the data take the converged steps. independent_world_v6 passed the cap as
+# flow's global --solver-max-time-step-in-days at the same value: the schedules here inject at one rate, so the
+# deck's per-slug TUNING cap takes the same steps
+OPM_MAX_STEP_PV = DEFAULT_MAX_STEP_PV
 VARIABLES = ("dp", "oil_cut", "c_polymer_out")
 
 
@@ -132,9 +133,9 @@ def clean_run(source: str, case: str, name: str, workdir: Path):
         return simulate(sched, TRUTH_PARAMS, cells=SOURCES[source], effects=effects, scheme="upwind",
                         pv_step=PV_STEP)
     deck = write_opm_deck(workdir / f"{case}_{name}" / "CORE.DATA", sched, TRUTH_PARAMS, effects,
-                          cells=SOURCES[source], pv_step=PV_STEP, log=lambda message: None)
-    step_days = OPM_MAX_STEP_PV * float(min(deck.slug_pv_time_days))
-    return run_opm(deck, form="series", extra_options=(f"--solver-max-time-step-in-days={step_days:.9g}",))
+                          cells=SOURCES[source], pv_step=PV_STEP, max_step_pv=OPM_MAX_STEP_PV,
+                          log=lambda message: None)
+    return run_opm(deck, form="series")
 
 
 def corefloods(source: str, case: str, seed: int, workdir: Path) -> dict[str, object]:
@@ -164,7 +165,7 @@ def run_one(source: str, case: str, seed: int, jobs: int, variant: str = "disper
                         parallel=parallel if jobs > 1 else None)
     result = summary(report_dataset(diag))
     return {"source": source, "variant": variant, "max_effects": max_effects, "case": case, "seed": seed,
-            "truth": list(CASES[case][1]),
+            "truth": list(CASES[case][1]), "opm_max_step_pv": OPM_MAX_STEP_PV if source == "opm" else None,
             "verdict": result["verdict"], "effects": [e["name"] for e in result["effects"]],
             "strengths": {e["name"]: e["strength"] for e in result["effects"]},
             "ambiguity_set": result["ambiguity_set"], "chi2_base": result["fit"]["chi2_base"],

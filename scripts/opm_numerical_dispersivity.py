@@ -20,7 +20,7 @@ of that formula on OPM's own run of each schedule of the null case, independentl
 
 and prints ``alpha_num`` in ft next to the dispersivity the diagnosis fitted on the same data (the records of the
 study, ``docs/independent_world_v3.json``: the ``dispersion`` effect's strength times the base's ``ALPHAL`` of
-0.01 ft). Needs ``flow`` (Debian ``libopm-simulators-bin``); about 10 s.
+0.01 ft). OPM takes its own time steps here (``max_step_pv=None``), as it did for those data. Needs ``flow`` (Debian ``libopm-simulators-bin``); about 10 s.
 
     python scripts/opm_numerical_dispersivity.py [--records docs/independent_world_v3.json]
 """
@@ -86,7 +86,7 @@ def measure(name: str, workdir: Path) -> dict:
     schedule = world.SCHEDULES[name]
     cells = world.SOURCES["opm"]
     deck = write_opm_deck(workdir / name / "CORE.DATA", schedule, world.TRUTH_PARAMS, world.truth_effects("null"),
-                          cells=cells, pv_step=world.PV_STEP, log=lambda message: None)
+                          cells=cells, pv_step=world.PV_STEP, max_step_pv=None, log=lambda message: None)
     series = run_opm(deck, workdir=workdir / name, form="series")
     k = next(i for i, s in enumerate(schedule.slugs) if s.polymer_ppm > 0.0)
     start_pv = sum(s.pv for s in schedule.slugs[:k])

@@ -2,19 +2,21 @@
 
     spflow export opm [--study FILE --experiment NAME] [--schedule SCHEDULE] [--params FILE]
                       [--calibration FILE.nc | --posterior FILE.nc --draw K|mean] [--effect NAME=VALUE ...]
-                      --out DIR [--cells N] [--pv-step PV] [--area-scale X] [--rock-density KG_M3] [--shear-sw SW]
-                      [--approximate]
+                      --out DIR [--cells N] [--pv-step PV] [--max-step-pv PV|none] [--area-scale X]
+                      [--rock-density KG_M3] [--shear-sw SW] [--approximate]
     spflow compare opm (the same options) [--scheme upwind|tvd]
 
 ``--study``/``--experiment`` take the experiment's core, rate (and per-slug rates), schedule, fluids, the study's
 fixed parameters and its base-model effects. ``SCHEDULE`` is a Table 2.5 name (``BCF1``..) or a TOML/JSON file
-``{name = ..., slugs = [{pv, salinity_ppm, polymer_ppm, ...}, ...]}``; it overrides the experiment's. ``--params`` is
-a TOML/JSON file with forward-model parameters: a flat table ``{NAME = value}`` or with ``[parameters]`` and
+``{name = ..., slugs = [{pv, salinity_ppm, polymer_ppm, ...}, ...]}``; it overrides the experiment's. ``--params``
+is a TOML/JSON file with forward-model parameters: a flat table ``{NAME = value}`` or with ``[parameters]`` and
 ``[effects]`` tables. ``--calibration`` takes the noise-consistent best point (``confidence_best``) of an
-``nsga2_calibration`` result, ``--posterior`` a draw (chain-major index) or the mean of an MCMC posterior; a parameter
-given by ``--params`` and one of them is refused. ``--effect`` overrides effect strengths. Every value taken is
-printed with its source (:mod:`.opm_model`). ``export`` writes ``DIR/CORE.DATA``; ``compare`` also runs OPM Flow and
-spflow and writes ``opm.nc``, ``spflow.nc``, ``comparison.csv`` and ``comparison.png``.
+``nsga2_calibration`` result, ``--posterior`` a draw (chain-major index) or the mean of an MCMC posterior; a
+parameter given by ``--params`` and one of them is refused. ``--effect`` overrides effect strengths. Every value
+taken is printed with its source (:mod:`.opm_model`). ``--max-step-pv`` caps OPM's time steps (default
+``DEFAULT_MAX_STEP_PV`` of :mod:`.opm_time_steps`; ``none``: OPM's own step control). ``export`` writes
+``DIR/CORE.DATA``; ``compare`` also runs OPM Flow and spflow and writes ``opm.nc``, ``spflow.nc``,
+``comparison.csv`` and ``comparison.png``.
 """
 
 from __future__ import annotations
@@ -24,7 +26,14 @@ from pathlib import Path
 
 from spflow.core.errors import ParameterError
 
+from .opm_time_steps import DEFAULT_MAX_STEP_PV
+
 __all__ = ["add_parser", "main"]
+
+
+def _max_step(text: str) -> float | None:
+    """``--max-step-pv``'s value: a number or ``none``."""
+    return None if text.strip().lower() == "none" else float(text)
 
 
 def _common(p) -> None:
@@ -42,6 +51,9 @@ def _common(p) -> None:
     p.add_argument("--out", required=True, metavar="DIR")
     p.add_argument("--cells", type=int, default=100)
     p.add_argument("--pv-step", type=float, default=0.01, help="report/summary interval, PV (default 0.01)")
+    p.add_argument("--max-step-pv", type=_max_step, default=DEFAULT_MAX_STEP_PV, metavar="PV|none",
+                   help=f"cap on OPM's time steps, PV of the slug injected (default {DEFAULT_MAX_STEP_PV:g}; 'none': "
+                   "OPM's own steps, whose time error can exceed a lab's noise)")
     p.add_argument("--area-scale", type=float, help="cross-section and rate scale (default: a 1e4 m2 section)")
     p.add_argument("--rock-density", type=float, default=2650.0, help="kg/m3, converts adsorption to kg/kg rock")
     p.add_argument("--shear-sw", type=float, metavar="SW",
@@ -80,7 +92,8 @@ def _sources(args: argparse.Namespace) -> dict:
 def main(args: argparse.Namespace) -> int:
     """Run ``spflow export opm`` or ``spflow compare opm`` (``args.command``)."""
     out = Path(args.out)
-    options = {"area_scale": args.area_scale, "rock_density": args.rock_density, "shear_sw": args.shear_sw}
+    options = {"area_scale": args.area_scale, "rock_density": args.rock_density, "shear_sw": args.shear_sw,
+               "max_step_pv": args.max_step_pv}
     if args.command == "export":
         from .opm_model import export_opm
 

@@ -13,6 +13,10 @@ computes it. Initial state: water at ``SWI``, pressure the steady flow profile o
 slug's rate above the producer pressure (a uniform pressure equal to the producer BHP stalls OPM's first Newton step).
 Water and oil are nearly incompressible (1e-7 1/bar); rock compressibility 1e-8 1/bar.
 
+Time steps: the deck caps OPM's at ``max_step_pv`` (default ``DEFAULT_MAX_STEP_PV``) of each slug's pore-volume
+time with a TUNING keyword per slug (:mod:`.opm_time_steps`), which OPM honours only when run with
+``--enable-tuning=true`` (:func:`~.opm_run.run_opm` passes it; the header says so).
+
 Mechanisms OPM cannot express are refused or approximated (:mod:`.opm_mechanisms`); the tables are
 :mod:`.opm_tables`, shear thinning (PLYSHLOG and the wells' bore diameter) :mod:`.opm_shear`.
 """
@@ -35,8 +39,9 @@ from spflow.plugins.forward.schedule import as_schedule
 from .opm_mechanisms import check_mechanisms, refuse_or_note
 from .opm_shear import SECONDS_PER_DAY, OpmShear, matching_bore_diameter, opm_shear
 from .opm_tables import KG_M3_PER_PPM, PA_PER_BAR, OpmTables, opm_tables
+from .opm_time_steps import DEFAULT_MAX_STEP_PV, tuning_keyword
 
-__all__ = ["OpmDeck", "write_opm_deck", "DARCY_METRIC", "DEFAULT_AREA_M2"]
+__all__ = ["OpmDeck", "write_opm_deck", "DARCY_METRIC", "DEFAULT_AREA_M2", "DEFAULT_MAX_STEP_PV"]
 
 #: Darcy constant of OPM's METRIC units: T [cP rm3/day/bar] = DARCY_METRIC k [mD] A [m2] / L [m]
 DARCY_METRIC = 0.00852702
@@ -58,6 +63,7 @@ class OpmDeck:
     pore_volume_m3: float  # of the scaled model
     slug_rate_m3_day: np.ndarray  # per slug, of the scaled model
     slug_pv_time_days: np.ndarray  # per slug, time to inject one pore volume
+    max_step_pv: float | None  # cap on OPM's time steps (PV of the slug injected; TUNING), None: OPM's own steps
     report_pv: np.ndarray  # injected PV at the end of every report step
     tables: OpmTables
     notes: list[str] = field(default_factory=list)
@@ -111,7 +117,7 @@ def _initial_pressure(p, tables, x_m, length_m, rate_ml_min) -> np.ndarray:
 def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, *, approximate: bool = False,
                    area_scale: float | None = None, pv_step: float = 0.01, rock_density: float = 2650.0,
                    swof_nodes: int = 401, polymer_nodes: int = 201, shear_sw: float | None = None,
-                   provenance=(), log=print) -> OpmDeck:
+                   max_step_pv: float | None = DEFAULT_MAX_STEP_PV, provenance=(), log=print) -> OpmDeck:
     """Write the OPM Flow deck of one coreflood to ``path`` (a ``.DATA`` file; its directory is created).
 
     ``schedule``, ``params`` and ``effects`` are those of :func:`spflow.simulate`. ``area_scale`` multiplies the
@@ -120,7 +126,9 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     Mechanisms OPM cannot express raise :class:`~.opm_mechanisms.OpmExportError` (a ``ParameterError``) naming
     them, unless ``approximate`` -- then each approximation is printed through ``log`` and kept in
     ``OpmDeck.notes``. ``shear_sw`` is the water saturation at which OPM's shear rate is matched to spflow's in a
-    two-phase core (default ``1 - S2RWC``; :mod:`.opm_shear`). ``provenance``: text lines (where each value came
+    two-phase core (default ``1 - S2RWC``; :mod:`.opm_shear`). ``max_step_pv`` caps OPM's time steps at that
+    fraction of each slug's pore-volume time (a TUNING keyword per slug; ``None``: OPM's own step control, whose time
+    error is large, see the module docstring). ``provenance``: text lines (where each value came
     from, :func:`~spflow.export.opm_model.export_opm`) written into the header as comments.
     """
     if isinstance(cells, bool) or not isinstance(cells, (int, np.integer)) or not 3 <= cells <= 100000:
@@ -128,6 +136,8 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     cells = int(cells)
     sched, p, s, foreign = _resolve(schedule, params, effects)
     pv_step = check_number("pv_step", pv_step, 0.0, sched.total_pv, lower_open=True)
+    if max_step_pv is not None:
+        max_step_pv = check_number("max_step_pv", max_step_pv, 0.0, 1.0, lower_open=True)
     rock_density = check_number("rock_density (kg/m3)", rock_density, 500.0, 10000.0)
     if shear_sw is not None:
         shear_sw = check_number("shear_sw", shear_sw, p["S1RWC"], 1.0, lower_open=True)
@@ -162,6 +172,15 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
                f"{', '.join(f'{t:.6g}' for t in t_pv)} days")
     log(scaling)
     notes.insert(0, scaling)
+    if max_step_pv is None:
+        stepping = ("OPM deck: no cap on OPM's time steps (OPM's own step control, up to a report step of "
+                    f"{pv_step:g} PV: its time error can exceed a lab's noise)")
+    else:
+        stepping = (f"OPM deck: time steps capped at {max_step_pv:g} PV = "
+                    f"{', '.join(f'{max_step_pv * t:.6g}' for t in t_pv)} days per slug (TUNING TSMAXZ; run flow with "
+                    "--enable-tuning=true)")
+    log(stepping)
+    notes.insert(1, stepping)
 
     x = (np.arange(cells) + 0.5) * dx
     pressure = _initial_pressure(p, tables, x, length, rates_ml_min[0])
@@ -176,7 +195,7 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
                       f"(Swcr = {shear.swcr:g}); well-bore diameter {diameter:.6g} m gives the wells' connections "
                       "the blocks' water velocity")
         log(shear_note)
-        notes.insert(1, shear_note)
+        notes.insert(2, shear_note)
     steps, report_pv = _report_steps(sched, pv_step)
     has_polymer = any(sl.polymer_ppm > 0.0 for sl in sched.slugs)
 
@@ -246,6 +265,8 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     for slug, sizes, rate, t_slug_pv in zip(sched.slugs, steps, rates, t_pv):
         w(f"-- slug {slug.name!r}: {slug.pv:g} PV, {slug.polymer_ppm:g} ppm polymer\n")
         w(f"WCONINJE\n  'INJ' WATER OPEN RATE {_fmt(rate)} 1* 10000 /\n/\n")
+        if max_step_pv is not None:
+            w(tuning_keyword(max_step_pv * t_slug_pv))
         if has_polymer:
             w(f"WPOLYMER\n  'INJ' {_fmt(slug.polymer_ppm * KG_M3_PER_PPM)} 0.0 /\n/\n")
         w("TSTEP\n  " + " ".join(_fmt(d * t_slug_pv) for d in sizes) + " /\n")
@@ -255,5 +276,5 @@ def write_opm_deck(path, schedule, params=None, effects=None, cells: int = 100, 
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(out))
     return OpmDeck(path=path, cells=cells, area_scale=area_scale, pore_volume_m3=pore_volume, slug_rate_m3_day=rates,
-                   slug_pv_time_days=t_pv, report_pv=report_pv, tables=tables, notes=notes, experiment=sched.name,
-                   params=dict(p), schedule=sched, shear=shear)
+                   slug_pv_time_days=t_pv, max_step_pv=max_step_pv, report_pv=report_pv, tables=tables, notes=notes,
+                   experiment=sched.name, params=dict(p), schedule=sched, shear=shear)

@@ -1,6 +1,7 @@
 """Run OPM Flow on an exported deck and read its summary into a coreflood-format Dataset.
 
-:func:`run_opm` runs ``flow`` (found on ``PATH``) in a directory of its own, reads the unified summary
+:func:`run_opm` runs ``flow`` (found on ``PATH``) in a directory of its own (with ``--enable-tuning=true`` when the
+deck caps the time steps, :mod:`.opm_deck`), reads the unified summary
 (:mod:`.eclipse_summary`) and converts it back to the core's scale with the deck's ``area_scale``
 (:func:`summary_to_coreflood`): the pressure series ``dp`` (Pa) = injector BHP - producer BHP at the end of every
 report step, and one effluent "tube" per report step with the oil cut, the recovery (cumulative oil / OOIP at the
@@ -30,6 +31,7 @@ from spflow.io.format import build_coreflood
 from .eclipse_summary import read_summary
 from .opm_deck import OpmDeck
 from .opm_tables import KG_M3_PER_PPM, PA_PER_BAR
+from .opm_time_steps import TUNING_OPTION
 
 __all__ = ["OpmNotFoundError", "OpmRunError", "flow_executable", "run_opm", "summary_to_coreflood",
            "summary_to_series", "FLOW_OPTIONS"]
@@ -140,7 +142,9 @@ def summary_to_coreflood(summary: dict[str, np.ndarray], deck: OpmDeck, experime
 
 def run_opm(deck: OpmDeck, workdir=None, *, form: str = "coreflood", extra_options=(), timeout_s: float = 3600.0):
     """Run ``flow`` on ``deck`` (in ``workdir``, default a temporary directory removed afterwards) and return its
-    coreflood Dataset (``form="coreflood"``) or its ``simulate()``-like series (``form="series"``).
+    coreflood Dataset (``form="coreflood"``) or its ``simulate()``-like series (``form="series"``), with the run's
+    options in attrs ``opm_flow_options`` and the deck's time-step cap in ``opm_max_step_pv`` (PV of the slug
+    injected). ``extra_options`` are further command-line options of ``flow``.
     :class:`OpmNotFoundError` if ``flow`` is absent, :class:`OpmRunError` if it fails (with the
     tail of its output) or shuts a well it cannot converge."""
     if form not in ("coreflood", "series"):
@@ -152,7 +156,8 @@ def run_opm(deck: OpmDeck, workdir=None, *, form: str = "coreflood", extra_optio
         deck_copy = run_dir / deck.path.name
         if deck_copy.resolve() != deck.path.resolve():
             shutil.copyfile(deck.path, deck_copy)
-        cmd = [exe, deck_copy.name, "--output-dir=.", *FLOW_OPTIONS, *extra_options]
+        tuning = (TUNING_OPTION,) if deck.max_step_pv is not None else ()
+        cmd = [exe, deck_copy.name, "--output-dir=.", *FLOW_OPTIONS, *tuning, *extra_options]
         try:
             proc = subprocess.run(cmd, cwd=run_dir, capture_output=True, text=True, timeout=timeout_s)
         except subprocess.TimeoutExpired:
@@ -167,4 +172,7 @@ def run_opm(deck: OpmDeck, workdir=None, *, form: str = "coreflood", extra_optio
             raise OpmRunError(f"OPM Flow shut a well on {deck.path} ({shut[0]!r}): its rates and pressures after "
                               f"that are not the coreflood's; options of the run: {' '.join(cmd[3:])}")
         summary = read_summary(smspec, unsmry)
-        return summary_to_coreflood(summary, deck) if form == "coreflood" else summary_to_series(summary, deck)
+        out = summary_to_coreflood(summary, deck) if form == "coreflood" else summary_to_series(summary, deck)
+        out.attrs["opm_flow_options"] = " ".join(cmd[3:])
+        out.attrs["opm_max_step_pv"] = deck.max_step_pv if deck.max_step_pv is not None else "none (OPM's own steps)"
+        return out

@@ -50,6 +50,21 @@ def test_export_writes_the_deck_with_the_file_parameters(files, capsys):
     assert np.isclose(mult[-1], 1 + (20.0 * x + 155.0 * x**3) * 0.145 ** -0.76, rtol=1e-9)
 
 
+def test_export_time_step_cap_default_value_and_none(files, capsys):
+    args = ["export", "opm", "--schedule", str(files / "s.toml"), "--params", str(files / "p.toml"),
+            "--effect", "capillary_desaturation=0", "--cells", "20"]
+    assert main([*args, "--out", str(files / "default")]) == 0
+    assert "time steps capped at 0.0005 PV" in capsys.readouterr().out
+    assert "TUNING" in (files / "default" / "CORE.DATA").read_text()
+    assert main([*args, "--max-step-pv", "0.002", "--out", str(files / "wide")]) == 0
+    assert "time steps capped at 0.002 PV" in capsys.readouterr().out
+    assert main([*args, "--max-step-pv", "none", "--out", str(files / "free")]) == 0
+    assert "no cap on OPM's time steps" in capsys.readouterr().out
+    assert "TUNING" not in (files / "free" / "CORE.DATA").read_text()
+    assert main([*args, "--max-step-pv", "-1", "--out", str(files / "bad")]) == 2
+    assert "max_step_pv" in capsys.readouterr().err
+
+
 def test_export_refuses_missing_mechanisms_with_a_clear_message(files, capsys):
     rc = main(["export", "opm", "--schedule", str(files / "s.toml"), "--params", str(files / "p.toml"),
                "--out", str(files / "x")])

@@ -163,10 +163,39 @@ def test_rrf_without_adsorption_is_refused(tmp_path):
         write_opm_deck(tmp_path / "R.DATA", SCHED, PARAMS, dict(OFF, polymer_adsorption=0.0), log=lambda m: None)
 
 
+def test_time_steps_are_capped_per_slug_by_tuning(tmp_path):
+    """TSMAXZ of each slug = cap x the slug's time to inject one PV at its own rate; no TUNING without a cap."""
+    d, length, phi = 0.0508, 0.1524, PARAMS["PORO"]
+    rates = (0.25, 1.0, 0.125)  # ml/min
+    sched = Schedule(tuple(Slug(n, pv, SALINITY, 0.0, c, q) for n, pv, c, q in
+                           (("W", 0.4, 0.0, rates[0]), ("P", 0.8, 1500.0, rates[1]), ("EWF", 0.6, 0.0, rates[2]))),
+                     "rates")
+    notes = []
+    deck = write_opm_deck(tmp_path / "C.DATA", sched, PARAMS, OFF, cells=40, pv_step=0.05, max_step_pv=0.002,
+                          log=notes.append)
+    text = deck.path.read_text()
+    t_pv = [phi * math.pi * d**2 / 4 * length / (q * 1e-6 / 60 * 86400) for q in rates]  # days, core scale
+    tuning = keyword_records(text, "TUNING")
+    assert len(tuning) == 3
+    record1 = [rec[0].replace("/", " ").split() for rec in tuning]
+    np.testing.assert_allclose([float(r[1]) for r in record1], [0.002 * t for t in t_pv], rtol=1e-8)  # TSMAXZ
+    np.testing.assert_allclose([float(r[0]) for r in record1], [0.002 * t for t in t_pv], rtol=1e-8)  # TSINIT
+    # each TUNING sits in its slug, before that slug's TSTEP
+    order = [ln.strip() for ln in text.splitlines() if ln.strip() in ("WCONINJE", "TUNING", "TSTEP")]
+    assert order == ["WCONINJE", "TUNING", "TSTEP"] * 3
+    assert any("capped at 0.002 PV" in n and "--enable-tuning=true" in n for n in notes)
+    assert deck.max_step_pv == 0.002
+    free = write_opm_deck(tmp_path / "F.DATA", sched, PARAMS, OFF, cells=40, pv_step=0.05, max_step_pv=None,
+                          log=notes.append)
+    assert keyword_records(free.path.read_text(), "TUNING") == [] and free.max_step_pv is None
+    assert any("no cap on OPM's time steps" in n for n in notes)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"cells": 2}, "cells"), ({"pv_step": 0.0}, "pv_step"), ({"area_scale": 0.5}, "area_scale"),
     ({"rock_density": -1.0}, "rock_density"), ({"params": {"PORO": 2.0}}, "PORO"),
-    ({"effects": {"no_such_effect": 1.0}}, "no_such_effect"),
+    ({"effects": {"no_such_effect": 1.0}}, "no_such_effect"), ({"max_step_pv": 0.0}, "max_step_pv"),
+    ({"max_step_pv": 2.0}, "max_step_pv"),
 ])
 def test_bad_input_names_the_field(tmp_path, kwargs, match):
     args = {"params": PARAMS, "effects": OFF} | kwargs

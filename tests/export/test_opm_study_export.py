@@ -247,14 +247,15 @@ def test_a_calibrated_corey_exponent_runs_in_opm_flow(study):
 
 @needs_flow
 def test_a_well_opm_flow_shuts_is_an_error(study, tmp_path, monkeypatch):
-    """The same deck with OPM's default 20 Newton iterations (a wrapper around the real ``flow``) shuts the
-    injector; the run is refused instead of returning the shut well's pressures."""
+    """The same deck with OPM's own time steps (no cap: the steps that failed) and OPM's default 20 Newton iterations
+    (a wrapper around the real ``flow``) shuts the injector; the run is refused instead of returning the shut well's
+    pressures."""
     wrapper = tmp_path / "flow"
     wrapper.write_text(f'#!/bin/bash\nexec {shutil.which("flow")} '
                        '"${@/--newton-max-iterations=40/--newton-max-iterations=20}"\n')
     wrapper.chmod(0o755)
     monkeypatch.setenv("PATH", f"{tmp_path}:{os.environ['PATH']}")
     deck = export_opm(study / "e2wc_shut", study=study / "study.toml", experiment="poly1", params={"E2WC": E2WC},
-                      cells=100, log=lambda line: None)
+                      cells=100, max_step_pv=None, log=lambda line: None)
     with pytest.raises(OpmRunError, match="shut a well.*INJ"):
         run_opm(deck)
