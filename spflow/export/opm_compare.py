@@ -46,8 +46,15 @@ def _midpoint(ds: xr.Dataset, half: float) -> float:
     return float(x[i - 1] + (half - c[i - 1]) / (c[i] - c[i - 1]) * (x[i] - x[i - 1]))
 
 
-def _dp_at(ds: xr.Dataset, pv: float) -> float:
-    return float(np.interp(pv, ds["pv"].values, ds["dp"].values))
+def _dp_at_slug_end(ds: xr.Dataset, end: float) -> float:
+    """Δp at the end of a slug: its left limit, from the samples up to ``end`` (OPM's report point there is rounded
+    to whole seconds, so samples within a quarter of the median spacing, at most 1e-3 PV, after ``end`` count as at
+    it). After a rate step the next sample already holds the next slug's Δp, which interpolating across would mix
+    in."""
+    pv, dp = ds["pv"].values, ds["dp"].values
+    tol = min(1.0e-3, 0.25 * float(np.median(np.diff(pv))))
+    keep = pv <= end + tol
+    return float(np.interp(end, pv[keep], dp[keep]))
 
 
 def comparison_table(opm: xr.Dataset, ref: xr.Dataset, sched) -> list[dict]:
@@ -71,7 +78,8 @@ def comparison_table(opm: xr.Dataset, ref: xr.Dataset, sched) -> list[dict]:
     end = 0.0
     for slug in sched.slugs:
         end += slug.pv
-        row(f"dp at the end of slug {slug.name!r} ({end:.3g} PV)", "Pa", _dp_at(opm, end), _dp_at(ref, end), True)
+        row(f"dp at the end of slug {slug.name!r} ({end:.3g} PV)", "Pa", _dp_at_slug_end(opm, end),
+            _dp_at_slug_end(ref, end), True)
     return rows
 
 

@@ -112,6 +112,23 @@ def test_waterflood_recovery_is_rate_independent_and_dp_scales_with_rate():
                                    err_msg=f"dp at {q} ml/min is not {q / QINJ:g} x dp at QINJ")
 
 
+@pytest.mark.parametrize("pv_step", [0.1, 0.01, 0.001])
+def test_dp_at_a_slug_end_is_the_ending_slugs(pv_step):
+    """The record at a slug end is the left limit: the ending slug's rate, also where the output time and the slug
+    end differ by rounding (140 x 0.01 = 1.4000000000000001 against 0.6 + 0.8 = 1.4)."""
+    slugs = [(0.6, 0.25), (0.8, 0.5), (0.6, 0.125)]
+    runs = [simulate([{"pv": pv_, "salinity_ppm": 9400.0} | ({"rate_ml_min": q} if rated else {}) for pv_, q in slugs],
+                     {"QINJ": QINJ, "DMOL": 0.0}, cells=30, effects=NO_RATE_PHYSICS, pv_step=pv_step)
+            for rated in (False, True)]
+    plain, stepped = runs
+    for end, (_, q), (_, q_next) in zip(np.cumsum([pv_ for pv_, _ in slugs])[:-1], slugs, slugs[1:]):
+        k = int(np.argmin(np.abs(plain["pv"].values - end)))
+        assert abs(plain["pv"].values[k] - end) < 1e-9
+        left = plain["dp"].values[k] * q / QINJ
+        assert stepped["dp"].values[k] == pytest.approx(left, rel=1e-9), (end, stepped["dp"].values[k], left,
+                                                                         left * q_next / q)
+
+
 @pytest.mark.parametrize("qinj", [0.25, 0.6])
 def test_rates_equal_to_qinj_give_the_plain_run_exactly(qinj):
     plain = simulate("BCF1", {"QINJ": qinj}, cells=40, pv_step=0.05)

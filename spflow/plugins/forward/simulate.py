@@ -32,6 +32,13 @@ def kernel_arguments(sched, resolved, strengths, pv_step):
     out_pv = output_grid(sched.total_pv, pv_step)
     end_pv = arrays["end_pv"].copy()
     end_pv[-1] = out_pv[-1]
+    # an output time that is a slug end up to rounding (140 x 0.01 = 1.4000000000000001, 0.6 + 0.8 = 1.4) is that
+    # end, so its record holds the ending slug's values like every slug end's (the left limit), not the next slug's
+    # after a rate step
+    tol = 1.0e-9 * max(1.0, float(out_pv[-1]))
+    near = np.abs(out_pv[:, None] - end_pv[None, :]) <= tol
+    hit = near.any(axis=1)
+    out_pv[hit] = end_pv[near.argmax(axis=1)[hit]]
     flow = slug_flow(resolved, sched.rates_ml_min(resolved["QINJ"]))
     return build_kernel_params(resolved, strengths), end_pv, inj, flow, out_pv
 
