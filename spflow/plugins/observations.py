@@ -5,7 +5,11 @@ the simulator reports on ``0, Δ, 2Δ, ...`` (:func:`~spflow.plugins.forward.sim
 sampling conventions the tubes have. Each variable is carried over with its own convention, never blindly
 interpolated:
 
-* ``dp`` (point value) — linear interpolation in the transducer series;
+* ``dp`` (point value) — linear interpolation in the transducer series, never across a rate step (Δp jumps there):
+  a point between two rate steps takes only the samples between them, a point at a rate step (the end of a slug)
+  the samples up to it (the left limit, as the simulator records a slug end), extrapolated linearly by at most a
+  quarter of the samples' median spacing (a reading time-stamped just before the step); farther, the point has no
+  data (NaN);
 * ``recovery`` (cumulative, reported at ``pv_tube_end``) — linear interpolation in ``pv_tube_end``;
 * ``oil_cut``, ``c_polymer_out``, ``c_surfactant_out``, ``salinity_out`` (tube averages) — the volume average of the
   tubes over the simulator's interval ``(pv - Δ, pv]``, which is what the simulator reports there.
@@ -29,6 +33,7 @@ later stage can rebuild the lab's error model (:func:`spflow.plugins.gap.observe
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 import xarray as xr
@@ -85,10 +90,34 @@ def _json_attrs(attrs) -> dict:
     return {k: v.tolist() if isinstance(v, (np.generic, np.ndarray)) else v for k, v in attrs.items()}
 
 
-def _point(x: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
-    """Linear interpolation of a point series, NaN outside its span."""
+def _point(x: np.ndarray, y: np.ndarray, grid: np.ndarray, steps=()) -> np.ndarray:
+    """Linear interpolation of a point series, NaN outside its span; with rate ``steps`` (PV), piecewise between
+    them (module docstring)."""
     keep = np.isfinite(y)
-    return np.interp(grid, x[keep], y[keep], left=np.nan, right=np.nan) if keep.any() else np.full(grid.size, np.nan)
+    x, y = x[keep], y[keep]
+    if not x.size:
+        return np.full(grid.size, np.nan)
+    if len(steps) == 0:
+        return np.interp(grid, x, y, left=np.nan, right=np.nan)
+    # a point within rounding of a step belongs to the slug the step ends
+    bounds = np.asarray(steps, dtype=np.float64) + 1.0e-9 * max(1.0, float(grid[-1]))
+    reach = 0.25 * float(np.median(np.diff(x))) * (1.0 + 1.0e-9) if x.size > 1 else 0.0
+    of_x, of_grid = np.searchsorted(bounds, x), np.searchsorted(bounds, grid)
+    out = np.full(grid.size, np.nan)
+    for k in np.unique(of_grid):
+        xs, ys = x[of_x == k], y[of_x == k]
+        at = of_grid == k
+        if xs.size == 0:
+            continue
+        g = grid[at]
+        v = np.interp(g, xs, ys, left=np.nan, right=np.nan)
+        if xs.size > 1:
+            slope_lo, slope_hi = (ys[1] - ys[0]) / (xs[1] - xs[0]), (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
+            lo, hi = (g < xs[0]) & (xs[0] - g <= reach), (g > xs[-1]) & (g - xs[-1] <= reach)
+            v[lo] = ys[0] + slope_lo * (g[lo] - xs[0])
+            v[hi] = ys[-1] + slope_hi * (g[hi] - xs[-1])
+        out[at] = v
+    return out
 
 
 def dead_volume_pv(ds: xr.Dataset) -> float:
@@ -116,14 +145,16 @@ def at_core_outlet(ds: xr.Dataset, shift: float) -> xr.Dataset:
     return out
 
 
-def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, step: float) -> dict[str, np.ndarray]:
-    """Each requested variable of coreflood ``ds`` on ``grid`` (spacing ``step``), NaN where it has no data."""
+def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, step: float,
+                      rate_steps=()) -> dict[str, np.ndarray]:
+    """Each requested variable of coreflood ``ds`` on ``grid`` (spacing ``step``), NaN where it has no data;
+    ``dp`` is not interpolated across the ``rate_steps`` (PV; :meth:`Schedule.rate_steps_pv`)."""
     out = {}
     for name in variables:
         if name not in ds:
             out[name] = np.full(grid.size, np.nan)
         elif name == "dp":
-            out[name] = _point(ds["pv"].values, ds["dp"].values, grid)
+            out[name] = _point(ds["pv"].values, ds["dp"].values, grid, rate_steps)
         elif name == "recovery":
             out[name] = _point(ds["pv_tube_end"].values, ds["recovery"].values, grid)
         else:
@@ -133,7 +164,7 @@ def on_simulator_grid(ds: xr.Dataset, variables: list[str], grid: np.ndarray, st
 
 class Observations(Stage):
     name = "observations"
-    version = "4"
+    version = "5"
     description = "measured corefloods (bundled names or files) on the simulator's output grid"
     output = OBSERVATIONS
     params = {
@@ -177,10 +208,16 @@ class Observations(Stage):
         grid, positions = common_grid(totals, step)
         values = {name: np.full((len(data), grid.size), np.nan) for name in variables}
         shifts = np.array([dead_volume_pv(ds) if self.params["dead_volume"] == "correct" else 0.0 for ds in data])
+        steps = [as_schedule(json.loads(ds.attrs["schedule"])).rate_steps_pv() for ds in data]
         for i, ds in enumerate(data):
             own = output_grid(float(totals[i]), step)
-            for name, series in on_simulator_grid(at_core_outlet(ds, float(shifts[i])), variables, own, step).items():
+            for name, series in on_simulator_grid(at_core_outlet(ds, float(shifts[i])), variables, own, step,
+                                                  steps[i]).items():
                 values[name][i, positions[i]] = series
+            if steps[i].size and "dp" in variables and ctx.verbose:
+                print(f"[{ctx.node}] {names[i]}: dp not interpolated across its rate steps at "
+                      f"{', '.join(f'{x:g}' for x in steps[i])} PV (the left limit at each; attr dp_rate_steps_pv)",
+                      file=sys.stderr, flush=True)
         out = xr.Dataset(
             {name: (("experiment", "pv"), v, {"units": VARIABLES[name][1], "long_name": f"observed {VARIABLES[name][2]}"
                                                                             " on the simulator grid"})
@@ -191,6 +228,7 @@ class Observations(Stage):
             coords={"experiment": ("experiment", names, {"long_name": "coreflood"}),
                     "pv": ("pv", grid, {"units": "1", "long_name": "injected pore volumes"})},
             attrs={"pv_step": step, "sources": " ".join(map(source_label, self.params["experiments"])),
-                   "coreflood_attrs": json.dumps({n: _json_attrs(ds.attrs) for n, ds in zip(names, data)})},
+                   "coreflood_attrs": json.dumps({n: _json_attrs(ds.attrs) for n, ds in zip(names, data)}),
+                   "dp_rate_steps_pv": json.dumps({n: st.tolist() for n, st in zip(names, steps)})},
         )
         return out

@@ -45,6 +45,53 @@ def test_each_variable_keeps_its_sampling_convention(tmp_path):
     assert float(out["total_pv"].sel(experiment="H1")) == pytest.approx(0.6)
 
 
+RATE_STEPS = [{"pv": 0.4, "salinity_ppm": 9400.0, "rate_ml_min": 0.25},
+              {"pv": 0.4, "salinity_ppm": 9400.0, "rate_ml_min": 0.5}]
+
+
+def _stepped(pv):
+    """dp = 1000 + 500 pv at 0.25 ml/min up to 0.4 PV (the end of the first slug included), twice that after."""
+    return np.where(pv <= 0.4 + 1e-12, 1.0, 2.0) * (1000 + 500 * pv)
+
+
+def test_dp_is_not_interpolated_across_a_rate_step(tmp_path, capsys):
+    """Readings time-stamped at 0.395 and 0.405 PV straddle the step at 0.4; the grid point there is the end of
+    the first slug (the left limit, extrapolated from 0.375-0.395), the next one the second slug's line; a reading
+    0.02 PV short of a step is too far to extrapolate (NaN)."""
+    pv = np.concatenate([np.arange(0, 0.4, 0.02) + 0.015, np.arange(0.405, 0.8, 0.02)])
+    pv = pv[pv < 0.8]
+    ds = build_coreflood(experiment="R1", source="test", pv=pv, dp=_stepped(pv), attrs={"schedule": schedule_json(
+        RATE_STEPS)})
+    grid = np.arange(9) * 0.1
+    got = on_simulator_grid(ds, ["dp"], grid, 0.1, [0.4])["dp"]
+    np.testing.assert_allclose(got[1:4], 1000 + 500 * grid[1:4], rtol=1e-12)
+    assert got[4] == pytest.approx(1000 + 500 * 0.4, rel=1e-12)  # the left limit, 0.005 PV past the last reading
+    np.testing.assert_allclose(got[5:8], 2 * (1000 + 500 * grid[5:8]), rtol=1e-12)
+    blind = on_simulator_grid(ds, ["dp"], grid, 0.1)["dp"]  # interpolating across the step: a blend at 0.4
+    assert abs(blind[4] / got[4] - 1.5) < 0.01
+    far = pv[np.abs(pv - 0.395) > 1e-9]  # the last reading of the first slug at 0.375: 0.025 PV short
+    ds_far = build_coreflood(experiment="R2", source="test", pv=far, dp=_stepped(far),
+                             attrs={"schedule": schedule_json(RATE_STEPS)})
+    assert np.isnan(on_simulator_grid(ds_far, ["dp"], grid, 0.1, [0.4])["dp"][4])
+    path = tmp_path / "r1.nc"
+    ds.to_netcdf(path)
+    out = Observations(experiments=[str(path)], pv_step=0.1, variables=["dp"]).run(StageContext("obs"))
+    assert out["dp"].values[0, 4] == pytest.approx(1000 + 500 * 0.4, rel=1e-12)
+    assert "rate steps at 0.4 PV" in capsys.readouterr().err
+    assert '"R1": [0.4]' in out.attrs["dp_rate_steps_pv"]
+
+
+def test_rate_steps_pv_of_a_schedule():
+    from spflow.plugins.forward.schedule import as_schedule
+
+    sched = as_schedule([{"pv": 0.3, "salinity_ppm": 9400.0}, {"pv": 0.2, "salinity_ppm": 9400.0},
+                         {"pv": 0.2, "salinity_ppm": 9400.0, "rate_ml_min": 0.5},
+                         {"pv": 0.2, "salinity_ppm": 9400.0, "rate_ml_min": 0.5},
+                         {"pv": 0.1, "salinity_ppm": 9400.0, "rate_ml_min": 1.0}])
+    np.testing.assert_allclose(sched.rate_steps_pv(), [0.5, 0.9])
+    assert as_schedule("BCF1").rate_steps_pv().size == 0
+
+
 def test_noise_free_twin_matches_the_simulation_it_was_made_from():
     """The twin measures a 0.005-PV simulation; on the 0.1-PV grid, dp and recovery are that simulation's point
     values and oil cut the mean of its twenty 0.005-PV interval averages."""

@@ -96,6 +96,13 @@ class Schedule:
         """Per-slug injection rates (ml/min): each slug's ``rate_ml_min``, or ``qinj`` (the run's QINJ) where unset."""
         return np.array([qinj if s.rate_ml_min is None else s.rate_ml_min for s in self.slugs], dtype=np.float64)
 
+    def rate_steps_pv(self) -> np.ndarray:
+        """Cumulative PV of every slug end after which the injection rate changes (``rate_ml_min`` differs from the
+        next slug's; unset against set counts as a change, as the run's QINJ may differ). Δp jumps there."""
+        ends = np.cumsum([s.pv for s in self.slugs], dtype=np.float64)
+        return np.array([e for e, a, b in zip(ends, self.slugs, self.slugs[1:]) if a.rate_ml_min != b.rate_ml_min],
+                        dtype=np.float64)
+
     @property
     def has_rates(self) -> bool:
         """True when some slug sets its own ``rate_ml_min``."""

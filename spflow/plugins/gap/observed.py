@@ -93,7 +93,8 @@ def _experiment(ds: xr.Dataset, pv_step: float, schedules: Mapping[str, object])
     present = [v for v in MEASURABLE if v in ds]
     if not present:
         raise ParameterError(f"coreflood {name!r} has none of the variables {list(MEASURABLE)}")
-    observed = {v: s for v, s in on_simulator_grid(ds, present, grid, pv_step).items() if np.isfinite(s).any()}
+    observed = {v: s for v, s in on_simulator_grid(ds, present, grid, pv_step, schedule.rate_steps_pv()).items()
+                if np.isfinite(s).any()}
     return _from_attrs(name, schedule, ds.attrs, grid, pv_step, observed)
 
 

@@ -90,7 +90,7 @@ class Predictor:
             return None
         todo = [v for v in variables if (key, v) not in self._series]
         if todo:
-            for v, series in on_simulator_grid(lab, todo, exp.pv, exp.pv_step).items():
+            for v, series in on_simulator_grid(lab, todo, exp.pv, exp.pv_step, exp.schedule.rate_steps_pv()).items():
                 self._series[(key, v)] = series
         return {v: self._series[(key, v)] for v in variables}
 

@@ -145,7 +145,9 @@ class Diagnose(Stage):
     #     the predictive_centre option; each coreflood's measurement model in the report (and a note when assumed)
     # 15: predictive_centre = "newton" by default (its twin rule passed, v10n; docs/gap.md, Scores); the forward
     #     model's dp is the global pressure's (its source digest keys this stage too)
-    version = "15"
+    # 16: dp never interpolated across a rate step, in the data and in the predictions (observations stage 5); the
+    #     forward model's record at a slug end is the ending slug's also where the output time is off by rounding
+    version = "16"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
