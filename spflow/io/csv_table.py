@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import csv
 import math
+import warnings
 from dataclasses import fields
 from pathlib import Path
 
@@ -42,7 +43,7 @@ from .metadata import core_unit
 from .quantities import VELOCITY_UNITS, parse_quantity, velocity_to_rate
 from .text_file import read_utf8_text
 
-__all__ = ["read_csv"]
+__all__ = ["read_csv", "TUBE_ROWS_NOTE"]
 
 _COLUMNS = tuple(ALLOWED_UNITS)
 _FLOAT_KEYS = {"pore_volume_ml", "ooip_ml"} | {f"noise_{f.name}" for f in fields(NoiseModel)}
@@ -246,10 +247,33 @@ def read_csv(path, *, units=None, columns=None) -> tuple[xr.Dataset, str | None]
     _derive(tubes, start, end, header, [line for line, _ in tube_rows], where)
 
     attrs = {k: v for k, v in header.items() if k not in ("units", "columns", "schedule", "experiment", "source")}
+    midpoints = _looks_like_midpoints(end - start)
+    if midpoints:
+        attrs[TUBE_ROWS_NOTE] = (f"{where}, line {tube_rows[0][0]}: {midpoints}; rows are read as tube ends "
+                                   "(docs/data.md): if the PVs are tube midpoints, every tube is shifted by half a "
+                                   "tube")
+        warnings.warn(attrs[TUBE_ROWS_NOTE], UserWarning, stacklevel=3)
     ds = build_coreflood(experiment=header.get("experiment", path.stem), source=header.get("source", str(path)),
                          pv=[p for p, _ in pv_dp], dp=[d for _, d in pv_dp] if pv_dp else None,
                          tube_start=start, tube_end=end, tubes=tubes if tube_rows else None, attrs=attrs)
     return ds, header.get("schedule")
+
+
+#: the attr holding the loader's remark on tube rows that look like tube midpoints (:func:`_looks_like_midpoints`)
+TUBE_ROWS_NOTE = "tube_rows_note"
+
+
+def _looks_like_midpoints(widths: np.ndarray) -> str:
+    """A description of the pattern tube midpoints give when read as tube ends -- equal tubes after a first one of
+    half their size -- or ``""``."""
+    if widths.size < 3:
+        return ""
+    rest = widths[1:]
+    typical = float(np.median(rest))
+    if typical <= 0.0 or rest.max() > 1.1 * rest.min() or abs(widths[0] - 0.5 * typical) > 0.05 * typical:
+        return ""
+    return (f"the first tube (0, {widths[0]:.6g}] PV is half the size of the other {rest.size} "
+            f"({typical:.6g} PV)")
 
 
 def _derive(tubes, start, end, header, lines, where):

@@ -2,6 +2,7 @@
 raise the documented ValueError naming the file, the line and the column."""
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -79,6 +80,20 @@ def test_synthetic_twin_written_as_lab_csv_loads_back_identically(tmp_path):
         np.testing.assert_array_equal(ds[name].values, twin[name].values)
         assert ds[name].dims == twin[name].dims and ds[name].attrs["units"] == twin[name].attrs["units"]
     np.testing.assert_allclose(ds["pv_tube_start"].values, twin["pv_tube_start"].values, atol=1e-12)
+
+
+def test_tube_rows_that_look_like_midpoints_are_named_not_changed(tmp_path):
+    """Tubes of 0.05 PV written at their midpoints (0.025, 0.075, ...) read as ends make a first tube of half the
+    size: the loader keeps the documented reading and says so (warning and attr); true tube ends say nothing."""
+    mids = "pv,oil_cut\n" + "".join(f"{0.025 + 0.05 * k:.3f},0.5\n" for k in range(6))
+    with pytest.warns(UserWarning, match=r"line 2: the first tube \(0, 0.025\] PV is half the size of the other 5"):
+        ds = load_coreflood(_write(tmp_path, mids))
+    assert "tube midpoints" in ds.attrs["tube_rows_note"]
+    np.testing.assert_allclose(ds["pv_tube_end"].values, 0.025 + 0.05 * np.arange(6))  # read as documented
+    ends = "pv,oil_cut\n" + "".join(f"{0.05 * (k + 1):.3f},0.5\n" for k in range(6))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert "tube_rows_note" not in load_coreflood(_write(tmp_path, ends, "ends.csv")).attrs
 
 
 @pytest.mark.parametrize("text, line, column, message", [

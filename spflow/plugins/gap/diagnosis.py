@@ -348,6 +348,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     assumed = measurement_note(cal + held)
     if assumed:
         notes.append(assumed)
+    notes.extend(note for e in cal + held for note in e.data_notes)
     candidates = candidates_for(catalogue, base.effects)
     predictor = Predictor(base, cal + held, parallel)
     ledger = CostLedger(predictor)

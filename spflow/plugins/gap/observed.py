@@ -22,6 +22,7 @@ import xarray as xr
 
 from spflow.core.errors import ParameterError
 from spflow.io import load_coreflood
+from spflow.io.csv_table import TUBE_ROWS_NOTE
 from spflow.io.metadata import core_params
 from spflow.plugins.forward.schedule import Schedule, as_schedule
 from spflow.plugins.forward.run_arguments import common_grid, output_grid
@@ -49,6 +50,8 @@ class Experiment:
     pore_volume_ml: float | None
     ooip_ml: float | None
     source: str = "in-memory coreflood"
+    #: what loading the file noticed about it (e.g. the CSV loader's ``tube_rows_note``), shown with the verdict
+    data_notes: tuple[str, ...] = ()
 
     def slug_ends(self) -> np.ndarray:
         """Cumulative injected PV at the end of each slug."""
@@ -58,6 +61,10 @@ class Experiment:
         """Index of the slug being injected at each PV (a point on a slug end belongs to the slug it ends)."""
         ends = self.slug_ends()
         return np.minimum(np.searchsorted(ends - 1e-9, pv), len(ends) - 1)
+
+
+#: coreflood attrs that hold a loader's remark about the data (spflow.io.csv_table)
+DATA_NOTE_ATTRS = (TUBE_ROWS_NOTE,)
 
 
 def _noise(attrs: Mapping, name: str) -> tuple[NoiseModel, bool]:
@@ -75,7 +82,8 @@ def _from_attrs(name: str, schedule: Schedule, attrs: Mapping, pv: np.ndarray, p
     core = core_params(attrs)
     return Experiment(name, schedule, core, noise, from_data, pv, pv_step, observed,
                       float(attrs["pore_volume_ml"]) if "pore_volume_ml" in attrs else None,
-                      float(attrs["ooip_ml"]) if "ooip_ml" in attrs else None)
+                      float(attrs["ooip_ml"]) if "ooip_ml" in attrs else None,
+                      data_notes=tuple(str(attrs[k]) for k in DATA_NOTE_ATTRS if k in attrs))
 
 
 def _experiment(ds: xr.Dataset, pv_step: float, schedules: Mapping[str, object]) -> Experiment:
