@@ -146,7 +146,8 @@ class Diagnose(Stage):
     # 15: predictive_centre = "newton" by default (its twin rule passed, v10n; docs/gap.md, Scores); the forward
     #     model's dp is the global pressure's (its source digest keys this stage too)
     # 16: dp never interpolated across a rate step, in the data and in the predictions (observations stage 5); the
-    #     forward model's record at a slug end is the ending slug's also where the output time is off by rounding
+    #     forward model's record at a slug end is the ending slug's also where the output time is off by rounding;
+    #     the data loader's remarks (a CSV's tube rows that look like midpoints) among the notes
     version = "16"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
