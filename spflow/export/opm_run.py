@@ -1,13 +1,13 @@
 """Run OPM Flow on an exported deck and read its summary into a coreflood-format Dataset.
 
 :func:`run_opm` runs ``flow`` (found on ``PATH``) in a directory of its own (with ``--enable-tuning=true`` when the
-deck caps the time steps, :mod:`.opm_deck`), reads the unified summary
-(:mod:`.eclipse_summary`) and converts it back to the core's scale with the deck's ``area_scale``
-(:func:`summary_to_coreflood`): the pressure series ``dp`` (Pa) = injector BHP - producer BHP at the end of every
-report step, and one effluent "tube" per report step with the oil cut, the recovery (cumulative oil / OOIP at the
-tube's end, OOIP = first FOIP + FOPT), the oil volume (ml at core scale) and the polymer concentration of the
-produced water (ppm, tube average). The injected PV is the injected water volume FWIT over the pore volume (OPM
-rounds report-step lengths to whole seconds, so time / (time of one PV) would be off by up to 0.3 % of a step).
+deck caps the time steps, :mod:`.opm_deck`), reads the unified summary (:mod:`.eclipse_summary`) and converts it
+back to the core's scale with the deck's ``area_scale`` (:func:`summary_to_coreflood`): the pressure series ``dp``
+(Pa) = injector BHP - producer BHP at the end of every report step, and one effluent "tube" per report step with the
+oil cut, the recovery (cumulative oil / OOIP at the tube's end, OOIP = first FOIP + FOPT), the oil volume (ml at
+core scale) and the polymer concentration of the produced water (ppm, tube average). The injected PV is the injected
+water volume FWIT over the pore volume (OPM rounds report-step lengths to whole seconds, so time / (time of one PV)
+would be off by up to 0.3 % of a step).
 
 :func:`summary_to_series` gives the same run in the form of a :func:`spflow.simulate` result (``pv`` from 0, ``dp``
 point values, effluent interval averages, ``param_*`` attrs), so that spflow's measurement chain

@@ -17,11 +17,13 @@ File layout (``docs/data.md``)::
     0.05,7790,1.0,0.0625
 
 Columns: ``pv`` (required, injected PV; strictly increasing), ``dp``, ``oil_cut``, ``recovery``, ``oil_volume``,
-``c_polymer_out``, ``c_surfactant_out``, ``salinity_out``. An empty cell means "not measured at this PV". A row
-with a tube column filled is a tube ending at its ``pv``; the tube starts at the previous tube's end (0 for the
-first). Other header keys are kept as ``meta_<key>`` attrs. Errors are ``ValueError`` naming the file, the line
-(1-based, as an editor shows it) and the column. The file must be UTF-8 text; empty, binary and UTF-16 files are
-named as such. PV must lie in ``[0, MAX_PV]``, ``dp`` must not be negative and ``recovery`` must not decrease.
+``c_polymer_out``, ``c_surfactant_out``, ``salinity_out``. An empty cell means "not measured at this PV". A row with
+a tube column filled is a tube ending at its ``pv``; the tube starts at the previous tube's end (0 for the first);
+tube rows whose first tube is half the size of the others (the pattern tube midpoints make) are read so all the
+same, with a warning and the attr ``tube_rows_note``. Other header keys are kept as ``meta_<key>`` attrs. Errors are
+``ValueError`` naming the file, the line (1-based, as an editor shows it) and the column. The file must be UTF-8
+text; empty, binary and UTF-16 files are named as such. PV must lie in ``[0, MAX_PV]``, ``dp`` must not be negative
+and ``recovery`` must not decrease.
 """
 
 from __future__ import annotations
@@ -46,6 +48,8 @@ from .text_file import read_utf8_text
 __all__ = ["read_csv", "TUBE_ROWS_NOTE"]
 
 _COLUMNS = tuple(ALLOWED_UNITS)
+#: the attr holding the loader's remark on tube rows that look like tube midpoints (:func:`_looks_like_midpoints`)
+TUBE_ROWS_NOTE = "tube_rows_note"
 _FLOAT_KEYS = {"pore_volume_ml", "ooip_ml"} | {f"noise_{f.name}" for f in fields(NoiseModel)}
 _TEXT_KEYS = {"experiment", "schedule", "source", "units", "columns"}
 _VOLUME_KEYS = ("oil_cut", "recovery", "oil_volume")
@@ -250,17 +254,12 @@ def read_csv(path, *, units=None, columns=None) -> tuple[xr.Dataset, str | None]
     midpoints = _looks_like_midpoints(end - start)
     if midpoints:
         attrs[TUBE_ROWS_NOTE] = (f"{where}, line {tube_rows[0][0]}: {midpoints}; rows are read as tube ends "
-                                   "(docs/data.md): if the PVs are tube midpoints, every tube is shifted by half a "
-                                   "tube")
+                                 "(docs/data.md): if the PVs are tube midpoints, every tube is shifted by half a tube")
         warnings.warn(attrs[TUBE_ROWS_NOTE], UserWarning, stacklevel=3)
     ds = build_coreflood(experiment=header.get("experiment", path.stem), source=header.get("source", str(path)),
                          pv=[p for p, _ in pv_dp], dp=[d for _, d in pv_dp] if pv_dp else None,
                          tube_start=start, tube_end=end, tubes=tubes if tube_rows else None, attrs=attrs)
     return ds, header.get("schedule")
-
-
-#: the attr holding the loader's remark on tube rows that look like tube midpoints (:func:`_looks_like_midpoints`)
-TUBE_ROWS_NOTE = "tube_rows_note"
 
 
 def _looks_like_midpoints(widths: np.ndarray) -> str:
