@@ -21,7 +21,9 @@ is what is left of the noise-free response after the base model is calibrated to
 the signal that can make a calibration gap at all. The report gives the metrics and the power curve for both.
 
 Results accumulate in JSON-lines files (``out/gap_validation/{dp_oil,effluent}.jsonl``; re-running skips finished
-twins, so a long study can be stopped and resumed); the report (``--out``, by default ``report.md`` in the results
+twins, so a long study can be stopped and resumed; a file made by another forward model -- the digest of its sources
+in every record -- is resumed only after ``--equivalence-check K`` reran K of its twins and reproduced every field
+of their records); the report (``--out``, by default ``report.md`` in the results
 directory, + ``.json`` and ``figures/<report name>_power_*.png`` next to it) is rebuilt from all results. The
 committed studies are ``docs/gap_validation_v*.md``; ``scripts/gap_study_history.py`` tables their headline metrics
 (``docs/gap_validation.md``).
@@ -871,6 +873,45 @@ SETS = {"dp_oil": ("Δp + oil cut", ("dp", "oil_cut")),
         "effluent": ("Δp + oil cut + effluent polymer and surfactant", EFFLUENT)}
 
 
+#: record fields that differ between two runs of one twin by the same code (timings) or name the code (digest)
+_RUN_FIELDS = ("cpu_s", "wall_s", "forward_digest")
+
+
+def equivalent_digests(file: Path, digest: str) -> set[str]:
+    """Forward-model digests that an equivalence check (:func:`check_equivalence`) accepted for ``file`` under
+    ``digest``."""
+    path = file.with_suffix(".equivalence.json")
+    checks = json.loads(path.read_text()) if path.exists() else []
+    return {old for c in checks if c["digest"] == digest for old in c["accepted"]}
+
+
+def check_equivalence(file: Path, done: dict[str, dict], specs: list[dict], args, variables, digest: str,
+                      others: list[str]) -> None:
+    """Rerun ``args.equivalence_check`` of the twins of ``file`` recorded under the forward-model digests
+    ``others`` (spread evenly over the study's order) with this code; resume only if every record is reproduced
+    exactly (every field but timings and the digest), recording the check in ``<file>.equivalence.json``;
+    otherwise stop naming the first twin and fields that differ."""
+    order = [s for s in specs if s["id"] in done and str(done[s["id"]].get("forward_digest")) in others]
+    k = min(args.equivalence_check, len(order))
+    chosen = [order[round(j * (len(order) - 1) / max(k - 1, 1))] for j in range(k)]
+    print(f"equivalence check: rerunning {[s['id'] for s in chosen]} (recorded under {others}, this code {digest})",
+          flush=True)
+    for spec in chosen:
+        old = done[spec["id"]]
+        new = run_twin(spec, args.cells, old["seed"], variables, not args.no_numerical_error,
+                       args.first_round_jacobian, args.heldout_predictive, args.options_seed, args.predictive_centre)
+        differ = sorted(f for f in set(old) | set(new) if f not in _RUN_FIELDS and old.get(f) != new.get(f))
+        if differ:
+            raise SystemExit(f"{file}: twin {spec['id']} is not reproduced by this forward model ({digest}): fields "
+                             f"{differ} differ; give another --results")
+    path = file.with_suffix(".equivalence.json")
+    checks = json.loads(path.read_text()) if path.exists() else []
+    checks.append({"digest": digest, "accepted": others, "twins": [s["id"] for s in chosen],
+                   "date": time.strftime("%Y-%m-%d %H:%M:%S")})
+    path.write_text(json.dumps(checks, indent=1) + "\n")
+    print(f"equivalence check passed: {k} twins reproduced exactly; recorded in {path}", flush=True)
+
+
 def select(specs: list[dict], only: list[str] | None) -> list[tuple[dict, int]]:
     """``(spec, index)`` of the twins of ``specs`` named by ``only`` (a twin id such as
     ``single:dispersion#3``, a scenario such as ``single:dispersion`` or ``null``; ``None``: all). The index is the
@@ -992,6 +1033,9 @@ def main(argv=None) -> int:
     p.add_argument("--cells", type=int, default=30)
     p.add_argument("--jobs", type=int, default=1)
     p.add_argument("--seed", type=int, default=20260101)
+    p.add_argument("--equivalence-check", type=int, default=0, metavar="K",
+                   help="resume a results file made by another forward model if rerunning K of its twins with this "
+                        "one reproduces their records exactly (recorded in <key>.equivalence.json)")
     p.add_argument("--results", default=str(ROOT / "out" / "gap_validation"),
                    help="directory of the JSON-lines files of finished twins (finished twins are skipped)")
     p.add_argument("--out", help="the report's Markdown file (default: report.md in --results)")
@@ -1021,12 +1065,15 @@ def main(argv=None) -> int:
                 raise SystemExit(f"{file} holds twins diagnosed with {option} = {sorted(mixed)}; resume them with "
                                  f"that option, or give another --results for {wanted!r}")
         # nor twins made and diagnosed by another forward model (the digest of its sources; none recorded before
-        # session 21): their data and predictions would mix two simulators
+        # session 21): their data and predictions would mix two simulators -- unless reruns showed the two agree
         digest = source_digest()[:16]
-        other = {r.get("forward_digest") for r in done.values()} - {digest}
-        if other:
+        other = {r.get("forward_digest") for r in done.values()} - {digest} - equivalent_digests(file, digest)
+        if other and args.equivalence_check <= 0:
             raise SystemExit(f"{file} holds twins made by another forward model (source digests "
-                             f"{sorted(map(str, other))}, this one {digest}); give another --results")
+                             f"{sorted(map(str, other))}, this one {digest}); give another --results, or "
+                             "--equivalence-check K to rerun K of its twins and resume if they reproduce exactly")
+        if other:
+            check_equivalence(file, done, specs, args, variables, digest, sorted(map(str, other)))
         todo = [(s, args.seed + 1000 * i) for s, i in select(specs, args.only) if s["id"] not in done]
         print(f"{len(specs)} twins, {len(todo)} to run", flush=True)
         from joblib import Parallel, delayed

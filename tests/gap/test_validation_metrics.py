@@ -199,3 +199,31 @@ def test_a_study_made_by_another_forward_model_is_not_resumed(tmp_path):
     # the current digest resumes (here: nothing left to run but the report of the one record)
     (tmp_path / "dp_oil.jsonl").write_text(json.dumps(dict(old, forward_digest=source_digest()[:16])) + "\n")
     assert gv.main(["--results", str(tmp_path), "--only", "null#0"]) in (0, None)
+
+
+def test_another_forward_model_resumes_only_after_its_twins_are_reproduced(tmp_path, monkeypatch):
+    """``--equivalence-check K`` reruns K recorded twins with this code (here a stand-in run_twin returning a given
+    record): a difference in any field but timings and the digest stops the resume naming the field; exact
+    reproduction records the check, and later resumes accept that digest without rerunning."""
+    old = dict(record("null", 0.0, "none"), id="null#0", seed=20260101, heldout_predictive="sampled",
+               predictive_centre="newton", first_round_jacobian="difference", options_seed=0,
+               forward_digest="0123456789abcdef", cpu_s=10.0, wall_s=11.0)
+    (tmp_path / "dp_oil.jsonl").write_text(json.dumps(old) + "\n")
+    reruns = []
+
+    def rerun(spec, cells, seed, *rest):
+        reruns.append((spec["id"], seed))
+        return dict(old, forward_digest=source_digest()[:16], cpu_s=99.0, verdict=verdict)
+
+    monkeypatch.setattr(gv, "run_twin", rerun)
+    args = ["--results", str(tmp_path), "--only", "null#0", "--equivalence-check", "1"]
+    verdict = "effect"
+    with pytest.raises(SystemExit, match=r"null#0 is not reproduced .*\['verdict'\]"):
+        gv.main(args)
+    assert not (tmp_path / "dp_oil.equivalence.json").exists()
+    verdict = "none"
+    assert gv.main(args) in (0, None)
+    assert reruns == [("null#0", 20260101)] * 2
+    check = json.loads((tmp_path / "dp_oil.equivalence.json").read_text())
+    assert check[0]["accepted"] == ["0123456789abcdef"] and check[0]["twins"] == ["null#0"]
+    assert gv.main(args[:4]) in (0, None) and len(reruns) == 2  # accepted: no rerun, no flag needed
