@@ -54,7 +54,7 @@ from .localisation import Cell, cells, gap_cells, ljung_box
 from .numerical_error import DEFAULT_VARIANTS, NumericalSpread, Numerics, inflate, numerical_spread
 from .numerical_scale import NumericalScale, estimate_scale
 from .path_stability import MAX_RERUNS, PathRerun, rerun_paths
-from .observed import MEASURABLE, Experiment, load_experiments, measurement_note
+from .observed import MEASURABLE, Experiment, load_experiments, measurement_note, rate_step_note
 from .prediction import Predictor
 from .predictive_scores import Predictive, compare, leave_one_slug_out, predictive
 from .psis_loo import compare_loo, psis_loo
@@ -349,6 +349,9 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     if assumed:
         notes.append(assumed)
     notes.extend(note for e in cal + held for note in e.data_notes)
+    stepped = rate_step_note(cal + held)
+    if stepped:
+        notes.append(stepped)
     candidates = candidates_for(catalogue, base.effects)
     predictor = Predictor(base, cal + held, parallel)
     ledger = CostLedger(predictor)

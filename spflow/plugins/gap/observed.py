@@ -29,7 +29,8 @@ from spflow.plugins.forward.run_arguments import common_grid, output_grid
 from spflow.plugins.observations import on_simulator_grid
 from spflow.synthetic import NoiseModel
 
-__all__ = ["Experiment", "load_experiments", "measurement_note", "observed_experiment", "MEASURABLE"]
+__all__ = ["Experiment", "load_experiments", "measurement_note", "rate_step_note", "observed_experiment",
+           "MEASURABLE"]
 
 #: variables a diagnosis can use (the simulator's responses that a lab measures)
 MEASURABLE = ("dp", "oil_cut", "recovery", "c_polymer_out", "c_surfactant_out", "salinity_out")
@@ -143,6 +144,17 @@ def measurement_note(experiments: Sequence[Experiment]) -> str | None:
     return (f"the measurement model of {', '.join(e.name for e in assumed)} is not wholly in the data (noise_* attrs "
             f"or CSV header keys; docs/data.md): where the data are silent the likelihood takes the documented lab "
             f"defaults (spflow.synthetic.NoiseModel). Used: {used}")
+
+
+def rate_step_note(experiments: Sequence[Experiment]) -> str | None:
+    """The note naming the rate steps across which no coreflood's Δp is interpolated (the data's or a prediction's,
+    :func:`spflow.plugins.observations.on_simulator_grid`); ``None`` without rate steps."""
+    steps = {e.name: e.schedule.rate_steps_pv() for e in experiments}
+    listed = [f"{name} at {', '.join(f'{x:g}' for x in pv)} PV" for name, pv in steps.items() if pv.size]
+    if not listed:
+        return None
+    return (f"injection-rate steps: {'; '.join(listed)}; Δp is not interpolated across them, and a point at a step "
+            "is the ending slug's (docs/data.md, Rate steps in the data)")
 
 
 def observed_experiment(observations: xr.Dataset, name: str) -> Experiment:
