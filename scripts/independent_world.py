@@ -45,8 +45,9 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from spflow.export.opm_deck import DEFAULT_MAX_STEP_PV, write_opm_deck
+from spflow.export.opm_deck import write_opm_deck
 from spflow.export.opm_run import run_opm
+from spflow.export.opm_time_steps import DEFAULT_MAX_STEP_PV
 from spflow.io.format import schedule_json
 from spflow.plugins.forward.schedule import Schedule, Slug
 from spflow.plugins.forward.simulate import simulate
@@ -95,7 +96,7 @@ BASE_CELLS = 60
 PV_STEP = 0.01
 # OPM Flow's time steps are capped at this many PV (the library's default): with OPM's own step control (up to a
 # report step, 0.01 PV) the fully implicit scheme's time error dominated the data (the pre-breakthrough dp of the
-# null flood PF3 at 0.3 PV 8 % high; spflow.export.opm_deck.DEFAULT_MAX_STEP_PV, docs/independent_world_v6.md); a
+# null flood PF3 at 0.3 PV 8 % high; spflow.export.opm_time_steps.DEFAULT_MAX_STEP_PV, docs/independent_world_v6.md); a
 # real core has no time-step error, so the data take the converged steps. independent_world_v6 passed the cap as
 # flow's global --solver-max-time-step-in-days at the same value: the schedules here inject at one rate, so the
 # deck's per-slug TUNING cap takes the same steps

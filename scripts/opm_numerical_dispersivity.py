@@ -20,7 +20,8 @@ of that formula on OPM's own run of each schedule of the null case, independentl
 
 and prints ``alpha_num`` in ft next to the dispersivity the diagnosis fitted on the same data (the records of the
 study, ``docs/independent_world_v3.json``: the ``dispersion`` effect's strength times the base's ``ALPHAL`` of
-0.01 ft). OPM takes its own time steps here (``max_step_pv=None``), as it did for those data. Needs ``flow`` (Debian ``libopm-simulators-bin``); about 10 s.
+0.01 ft). OPM takes its own time steps here (``max_step_pv=None``), as it did for those data. Needs ``flow``
+(Debian ``libopm-simulators-bin``); about 10 s.
 
     python scripts/opm_numerical_dispersivity.py [--records docs/independent_world_v3.json]
 """
