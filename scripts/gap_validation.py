@@ -900,7 +900,9 @@ def check_equivalence(file: Path, done: dict[str, dict], specs: list[dict], args
         old = done[spec["id"]]
         new = run_twin(spec, args.cells, old["seed"], variables, not args.no_numerical_error,
                        args.first_round_jacobian, args.heldout_predictive, args.options_seed, args.predictive_centre)
-        differ = sorted(f for f in set(old) | set(new) if f not in _RUN_FIELDS and old.get(f) != new.get(f))
+        # compared as the JSON the records are stored as (NaN equal to NaN)
+        differ = sorted(f for f in set(old) | set(new) if f not in _RUN_FIELDS
+                        and json.dumps(old.get(f), sort_keys=True) != json.dumps(new.get(f), sort_keys=True))
         if differ:
             raise SystemExit(f"{file}: twin {spec['id']} is not reproduced by this forward model ({digest}): fields "
                              f"{differ} differ; give another --results")

@@ -207,8 +207,9 @@ def test_another_forward_model_resumes_only_after_its_twins_are_reproduced(tmp_p
     reproduction records the check, and later resumes accept that digest without rerunning."""
     old = dict(record("null", 0.0, "none"), id="null#0", seed=20260101, heldout_predictive="sampled",
                predictive_centre="newton", first_round_jacobian="difference", options_seed=0,
-               forward_digest="0123456789abcdef", cpu_s=10.0, wall_s=11.0)
+               forward_digest="0123456789abcdef", cpu_s=10.0, wall_s=11.0, gap_closed_calibration=float("nan"))
     (tmp_path / "dp_oil.jsonl").write_text(json.dumps(old) + "\n")
+    old = json.loads(json.dumps(old))  # a rerun's NaN is another float object than the stored one's
     reruns = []
 
     def rerun(spec, cells, seed, *rest):
