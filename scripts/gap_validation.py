@@ -1090,7 +1090,8 @@ def main(argv=None) -> int:
                 fh.flush()
                 print(f"{record['id']:<40} snr {record['snr']:7.1f}  {record['verdict']:<17} "
                       f"{record['accepted']} cpu {record['cpu_s']:.0f}s", flush=True)
-        (results / f"{key}.command").write_text(command)
+        if todo:  # the command that made twins (not a check or report run of a finished selection)
+            (results / f"{key}.command").write_text(command)
     sets, lifts, commands = {}, {}, []
     for name, (title, _) in SETS.items():
         paths = {None: results / f"{name}.jsonl"} | {r: next_experiment_file(results, name, r) for r in ADDED_AS}
