@@ -204,11 +204,12 @@ class Observations(Stage):
         if len(set(names)) != len(names):
             raise ParameterError(f"stage 'observations': experiments must be distinct, got {names}")
         step, variables = self.params["pv_step"], list(self.params["variables"])
-        totals = np.array([as_schedule(json.loads(ds.attrs["schedule"])).total_pv for ds in data])
+        schedules = [as_schedule(json.loads(ds.attrs["schedule"])) for ds in data]
+        totals = np.array([sched.total_pv for sched in schedules])
         grid, positions = common_grid(totals, step)
         values = {name: np.full((len(data), grid.size), np.nan) for name in variables}
         shifts = np.array([dead_volume_pv(ds) if self.params["dead_volume"] == "correct" else 0.0 for ds in data])
-        steps = [as_schedule(json.loads(ds.attrs["schedule"])).rate_steps_pv() for ds in data]
+        steps = [sched.rate_steps_pv() for sched in schedules]
         for i, ds in enumerate(data):
             own = output_grid(float(totals[i]), step)
             for name, series in on_simulator_grid(at_core_outlet(ds, float(shifts[i])), variables, own, step,
