@@ -877,12 +877,16 @@ SETS = {"dp_oil": ("Δp + oil cut", ("dp", "oil_cut")),
 _RUN_FIELDS = ("cpu_s", "wall_s", "forward_digest")
 
 
+def _equivalence_checks(file: Path) -> tuple[Path, list[dict]]:
+    """The file recording ``file``'s equivalence checks and the checks in it (none yet: ``[]``)."""
+    path = file.with_suffix(".equivalence.json")
+    return path, (json.loads(path.read_text()) if path.exists() else [])
+
+
 def equivalent_digests(file: Path, digest: str) -> set[str]:
     """Forward-model digests that an equivalence check (:func:`check_equivalence`) accepted for ``file`` under
     ``digest``."""
-    path = file.with_suffix(".equivalence.json")
-    checks = json.loads(path.read_text()) if path.exists() else []
-    return {old for c in checks if c["digest"] == digest for old in c["accepted"]}
+    return {old for c in _equivalence_checks(file)[1] if c["digest"] == digest for old in c["accepted"]}
 
 
 def check_equivalence(file: Path, done: dict[str, dict], specs: list[dict], args, variables, digest: str,
@@ -906,11 +910,12 @@ def check_equivalence(file: Path, done: dict[str, dict], specs: list[dict], args
         if differ:
             raise SystemExit(f"{file}: twin {spec['id']} is not reproduced by this forward model ({digest}): fields "
                              f"{differ} differ; give another --results")
-    path = file.with_suffix(".equivalence.json")
-    checks = json.loads(path.read_text()) if path.exists() else []
+    path, checks = _equivalence_checks(file)
     checks.append({"digest": digest, "accepted": others, "twins": [s["id"] for s in chosen],
                    "date": time.strftime("%Y-%m-%d %H:%M:%S")})
-    path.write_text(json.dumps(checks, indent=1) + "\n")
+    partial = path.with_suffix(".partial")
+    partial.write_text(json.dumps(checks, indent=1) + "\n")
+    partial.replace(path)  # atomic: an interrupted write leaves the previous checks
     print(f"equivalence check passed: {k} twins reproduced exactly; recorded in {path}", flush=True)
 
 
