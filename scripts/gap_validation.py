@@ -46,6 +46,7 @@ results substituted, predicted against realised decision accuracy), partial resu
     python scripts/gap_validation.py --reduced --effluent --jobs 2      # with effluent concentrations
     python scripts/gap_validation.py --next-experiment --jobs 2       # the second phase on the dp_oil results
     python scripts/gap_validation.py --report-only --results DIR --out FILE   # the report of a study stopped part-way
+    python scripts/gap_validation.py --restore docs/gap_validation_v12.json --results DIR   # its twins, to resume
 """
 
 from __future__ import annotations
@@ -940,6 +941,35 @@ def _records(file: Path, cells: int) -> dict[str, dict]:
     return {r["id"]: r for r in map(json.loads, file.read_text().splitlines()) if r["cells"] == cells}
 
 
+def restore(report: Path, results: Path) -> list[Path]:
+    """Write the results files of a committed report (the ``.json`` of ``--out``: every finished twin's record and
+    those of its next-experiment phases) back into ``results``, each with its generating command, so that a study
+    whose results directory was lost (a fresh clone) resumes where the report stopped. Refuses to overwrite an
+    existing results file. Returns the files written."""
+    payload = json.loads(report.read_text())
+    commands = list(payload["commands"])
+    phases = []
+    for name, (title, _) in SETS.items():  # in the order main() reads the files and their commands
+        found = payload["sets"].get(title)
+        if found is None:
+            continue
+        phases.append((results / f"{name}.jsonl", found["twins"]))
+        phases += [(next_experiment_file(results, name, role), found[f"next_experiment_{role}"]["twins"])
+                   for role in ADDED_AS if f"next_experiment_{role}" in found]
+    existing = [str(path) for path, _ in phases if path.exists()]
+    if existing:
+        raise SystemExit(f"{', '.join(existing)} exist: --restore writes only results files that are not there")
+    results.mkdir(parents=True, exist_ok=True)
+    for path, records in phases:
+        command = commands.pop(0) if commands else f"restored from {report}"
+        for target, text in ((path, "".join(json.dumps(r) + "\n" for r in records)),
+                             (path.with_suffix(".command"), command)):
+            tmp = target.with_name(target.name + ".tmp")
+            tmp.write_text(text)
+            tmp.replace(target)
+    return [path for path, _ in phases]
+
+
 def twin_snrs(record: dict) -> dict[str, float]:
     """The SNRs (:func:`_snr`) of a finished twin, regenerated from its record's scenario and seed."""
     base, truth, data = twin(twin_spec(record), record["cells"], record["seed"])
@@ -1018,6 +1048,9 @@ def main(argv=None) -> int:
     p.add_argument("--only", nargs="+", metavar="TWIN",
                    help="run only these twins (ids such as 'single:dispersion#3' or whole scenarios such as "
                         "'single:dispersion'; seeds as in the full study of the given counts)")
+    p.add_argument("--restore", metavar="REPORT_JSON",
+                   help="run no twin: write the finished twins of a committed report (docs/gap_validation_*.json) "
+                        "into --results, which must not hold them yet, so that the study resumes from there")
     p.add_argument("--add-snr", action="store_true",
                    help="run no diagnosis: add the SNR beyond numerics to the finished twins in --results that lack "
                         "it (regenerated from their seeds; the file is rewritten once all are done)")
@@ -1052,7 +1085,10 @@ def main(argv=None) -> int:
     results = Path(args.results)
     results.mkdir(parents=True, exist_ok=True)
     command = "python scripts/gap_validation.py " + " ".join(sys.argv[1:] if argv is None else argv)
-    if args.add_snr:
+    if args.restore:
+        for path in restore(Path(args.restore), results):
+            print(f"restored {path} ({len(path.read_text().splitlines())} twins)")
+    elif args.add_snr:
         added = add_snrs(results / f"{key}.jsonl", args.jobs)
         print(f"added the SNR beyond numerics to {added} twins")
     elif args.next_experiment and not args.report_only:

@@ -228,3 +228,25 @@ def test_another_forward_model_resumes_only_after_its_twins_are_reproduced(tmp_p
     check = json.loads((tmp_path / "dp_oil.equivalence.json").read_text())
     assert check[0]["accepted"] == ["0123456789abcdef"] and check[0]["twins"] == ["null#0"]
     assert gv.main(args[:4]) in (0, None) and len(reruns) == 2  # accepted: no rerun, no flag needed
+
+
+def test_restore_writes_a_reports_twins_back_as_the_results_files_main_reads(tmp_path):
+    """--restore: every set's records and its next-experiment phase's, each file with the command the report
+    lists for it (in the order main() reads them), readable by the resume path; never over an existing file."""
+    first = [dict(r, id=f"{r['id']}#{k}", gap_closed_calibration=float("nan")) for k, r in enumerate(RECORDS)]
+    lifted = [{"id": first[6]["id"], "seed": 1, "cells": 30}]
+    report = tmp_path / "report.json"
+    report.write_text(json.dumps({"commands": ["cmd first", "cmd heldout"], "sets": {
+        gv.SETS["dp_oil"][0]: {"metrics": {}, "twins": first,
+                               "next_experiment_heldout": {"twins": lifted, "added_as": "heldout"}}}}))
+    results = tmp_path / "results"
+    written = gv.restore(report, results)
+    assert written == [results / "dp_oil.jsonl", gv.next_experiment_file(results, "dp_oil", "heldout")]
+    back = gv._records(results / "dp_oil.jsonl", 30)
+    assert list(back) == [r["id"] for r in first]
+    assert [json.dumps(r) for r in back.values()] == [json.dumps(r) for r in first]  # NaN as stored JSON
+    assert gv._records(written[1], 30) == {lifted[0]["id"]: lifted[0]}
+    assert (results / "dp_oil.command").read_text() == "cmd first"
+    assert written[1].with_suffix(".command").read_text() == "cmd heldout"
+    with pytest.raises(SystemExit, match="dp_oil.jsonl"):
+        gv.restore(report, results)
