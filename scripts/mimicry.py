@@ -73,7 +73,8 @@ def main(argv=None) -> int:
     p.add_argument("--cells", type=int, default=30)
     args = p.parse_args(argv)
     lines = (Path(args.results) / "dp_oil.jsonl").read_text().splitlines()
-    records = [r for r in map(json.loads, lines) if r["cells"] == args.cells and r["scenario"].startswith(args.scenario)]
+    records = [r for r in map(json.loads, lines)
+               if r["cells"] == args.cells and r["scenario"].startswith(args.scenario)]
     print(f"| twin | truth | {args.effect} strength (step 0) | cosine raw | projected | exact | verdict | accepted |")
     print("|---|---|---|---|---|---|---|---|")
     for r in records:
