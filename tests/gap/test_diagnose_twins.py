@@ -85,7 +85,8 @@ def test_strong_capillary_pressure_twin_is_identified(tmp_path):
     weights = default["heldout_weights"]
     refitted = [r for r in default["ranked_effects"] if r["shortlisted"]]
     assert "base" in weights and all(weights[f"base+{r['name']}"] == {"pareto_k": r["heldout_pareto_k"],
-                                                                      "ess": r["heldout_ess"]} for r in refitted)
+                                                                      "ess": r["heldout_ess"],
+                                                                      "mcse": r["heldout_mcse"]} for r in refitted)
     over = sorted(m for m, v in weights.items() if v["pareto_k"] > 0.7)
     assert default["heldout_unreliable"] == over
     assert any("sampled held-out score is unreliable" in n for n in default["notes"]) == bool(over)

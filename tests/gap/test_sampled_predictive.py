@@ -118,8 +118,9 @@ def test_an_optimum_short_of_convergence_makes_the_weights_unreliable_and_newton
     f = fitted(z_short, jc, b)
     short = [sampled_predictive(linear(jc, b), linear(ah, o), f, tau=0.5, draws=100, seed=s) for s in range(5)]
     assert all(w.pareto_k > RELIABLE_PARETO_K for w in short)
-    note = unreliable_weights_note({"base": (short[0].pareto_k, short[0].ess)}, 100)
-    assert f"base (k {short[0].pareto_k:.2f}, ESS {short[0].ess:.1f})" in note and "laplace" in note
+    note = unreliable_weights_note({"base": (short[0].pareto_k, short[0].ess, short[0].mcse)}, 100)
+    assert (f"base (k {short[0].pareto_k:.2f}, ESS {short[0].ess:.1f}, Monte Carlo SE {short[0].mcse:.2f})" in note
+            and "laplace" in note)
     mended = sampled_predictive(linear(jc, b), linear(ah, o), f, tau=0.5, draws=4000, seed=1, centre="newton")
     s_pred = np.eye(12) + ah @ cov @ ah.T
     w = ah @ z_opt - o

@@ -218,10 +218,10 @@ class GapDiagnosis:
     closers: list[str] = field(default_factory=list)
     #: the reruns along other optimiser paths (``Options.path_reruns``), empty when not checked
     path_reruns: list[PathRerun] = field(default_factory=list)
-    #: model label -> (Pareto k, effective sample size) of every sampled held-out predictive the diagnosis scored
-    #: (``heldout_predictive = "sampled"``; the discrepancy competitor shares the base's); those with
-    #: ``k > RELIABLE_PARETO_K`` are named in ``notes``
-    heldout_weights: dict[str, tuple[float, float]] = field(default_factory=dict)
+    #: model label -> (Pareto k, effective sample size, Monte Carlo SE in nats) of every sampled held-out predictive
+    #: the diagnosis scored (``heldout_predictive = "sampled"``; the discrepancy competitor shares the base's
+    #: draws); those with ``k > RELIABLE_PARETO_K`` are named in ``notes``
+    heldout_weights: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
     @property
     def dof(self) -> int:
@@ -403,7 +403,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
     pvalue = float(chi2.sf(base_fit.chi2, dof))
     say(f"base chi2 = {base_fit.chi2:.1f} on {dof} dof (p = {pvalue:.3g}); {predictor.runs} forward runs")
 
-    heldout_weights: dict[str, tuple[float, float]] = {}
+    heldout_weights: dict[str, tuple[float, float, float]] = {}
 
     def held_out(f: Fit, shift: np.ndarray | None = None) -> Predictive:
         if options.heldout_predictive == "laplace":
@@ -417,7 +417,7 @@ def diagnose(calibration: Sequence, heldout: Sequence, base: BaseModel, catalogu
         say(f"sampled held-out predictive of {model}: effective sample size {w.ess:.1f} of "
             f"{options.predictive_draws} draws, Pareto k {w.pareto_k:.2f}, Monte Carlo SE {w.mcse:.2f} nats")
         if shift is None:  # (the competitor shifts the base's draws: same weights, same k and ESS)
-            heldout_weights[model] = (w.pareto_k, w.ess)
+            heldout_weights[model] = (w.pareto_k, w.ess, w.mcse)
         return w
 
     def out_of_sample(f: Fit) -> Predictive:

@@ -30,8 +30,8 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
   variants per block, unscaled) and the scale alone as the number ``numerical_scale``, ``discrepancy`` (the
   competitor's terms, calibration chi^2, held-out dELPD over the base), ``search`` (pool, subsets fitted,
   admissible, chosen, forward runs), ``notes`` (blocks left out of the report; the dispersivity a named dispersion
-  stands for; the models whose sampled held-out score is unreliable), ``heldout_weights`` (Pareto k and effective
-  sample size of every sampled held-out predictive, the base's included, by model), ``path_reruns`` (the
+  stands for; the models whose sampled held-out score is unreliable), ``heldout_weights`` (Pareto k, effective
+  sample size and Monte Carlo SE in nats of every sampled held-out predictive, the base's included, by model), ``path_reruns`` (the
   diagnosis rerun along other optimiser paths: difference step, verdict, set, effects, forward runs, whether it
   agrees; :mod:`~spflow.plugins.gap.path_stability`) and ``measurement`` (per coreflood the measurement model the
   likelihood used and whether the data gave it) as JSON.
@@ -381,8 +381,8 @@ def report_dataset(g: GapDiagnosis) -> xr.Dataset:
         **({} if g.numerical_scale is None else {"numerical_scale": g.numerical_scale.estimate}),
         "discrepancy": json.dumps(discrepancy),
         "notes": json.dumps(g.notes),
-        "heldout_weights": json.dumps({m: {"pareto_k": _f(k), "ess": _f(ess)}
-                                      for m, (k, ess) in g.heldout_weights.items()}),
+        "heldout_weights": json.dumps({m: {"pareto_k": _f(k), "ess": _f(ess), "mcse": _f(mcse)}
+                                      for m, (k, ess, mcse) in g.heldout_weights.items()}),
         "path_reruns": json.dumps([r.as_dict() for r in g.path_reruns]),
         "accepted_steps": json.dumps(g.accepted),
         "final_model": g.final_label,

@@ -166,11 +166,12 @@ def sampled_predictive(calibration: Residuals, heldout: Residuals, fitted: Fit, 
     return Predictive(out.lpd, out.gradient, out.whitened, ess=out.ess, pareto_k=float(k), mcse=out.mcse)
 
 
-def unreliable_weights_note(unreliable: dict[str, tuple[float, float]], draws: int) -> str:
+def unreliable_weights_note(unreliable: dict[str, tuple[float, float, float]], draws: int) -> str:
     """The diagnosis's note naming the models whose sampled held-out score is unreliable: ``unreliable`` maps a
-    model's label to (Pareto k, effective sample size) of its importance weights, ``draws`` the draws taken."""
-    listed = "; ".join(f"{m} (k {k:.2f}, ESS {ess:.1f})"
-                       for m, (k, ess) in sorted(unreliable.items(), key=lambda x: -x[1][0]))
+    model's label to (Pareto k, effective sample size, Monte Carlo SE in nats) of its importance weights,
+    ``draws`` the draws taken."""
+    listed = "; ".join(f"{m} (k {k:.2f}, ESS {ess:.1f}, Monte Carlo SE {mcse:.2f})"
+                       for m, (k, ess, mcse) in sorted(unreliable.items(), key=lambda x: -x[1][0]))
     return (f"the sampled held-out score is unreliable for {len(unreliable)} model(s), Pareto k > "
             f"{RELIABLE_PARETO_K} over {draws} draws: {listed}. Each rests on a few draws: its Monte Carlo SE "
             "understates its error and another seed of the draws can change the ambiguity set (docs/gap.md, Scores: "

@@ -148,7 +148,8 @@ class Diagnose(Stage):
     # 16: dp never interpolated across a rate step, in the data and in the predictions (observations stage 5); the
     #     forward model's record at a slug end is the ending slug's also where the output time is off by rounding;
     #     the data loader's remarks (a CSV's tube rows that look like midpoints) among the notes
-    version = "16"
+    # 17: heldout_weights also give each sampled held-out score's Monte Carlo SE (summary.json)
+    version = "17"
     description = "sim-to-real gap diagnosis: where the calibrated model misses, which effect explains it, how far"
     inputs = {"calibrated": DESIGN}
     optional_inputs = frozenset({"calibrated"})
