@@ -31,10 +31,10 @@ are in nats, written ``units = "1"`` with "nats" in their ``long_name``):
   competitor's terms, calibration chi^2, held-out dELPD over the base), ``search`` (pool, subsets fitted,
   admissible, chosen, forward runs), ``notes`` (blocks left out of the report; the dispersivity a named dispersion
   stands for; the models whose sampled held-out score is unreliable), ``heldout_weights`` (Pareto k, effective
-  sample size and Monte Carlo SE in nats of every sampled held-out predictive, the base's included, by model), ``path_reruns`` (the
-  diagnosis rerun along other optimiser paths: difference step, verdict, set, effects, forward runs, whether it
-  agrees; :mod:`~spflow.plugins.gap.path_stability`) and ``measurement`` (per coreflood the measurement model the
-  likelihood used and whether the data gave it) as JSON.
+  sample size and Monte Carlo SE in nats of every sampled held-out predictive, the base's included, by model),
+  ``path_reruns`` (the diagnosis rerun along other optimiser paths: difference step, verdict, set, effects, forward
+  runs, whether it agrees; :mod:`~spflow.plugins.gap.path_stability`) and ``measurement`` (per coreflood the
+  measurement model the likelihood used and whether the data gave it) as JSON.
 
 :func:`summary` reads only the Dataset, so a report loaded from disk gives the same ``summary.json``.
 """
