@@ -878,6 +878,13 @@ SETS = {"dp_oil": ("Δp + oil cut", ("dp", "oil_cut")),
 _RUN_FIELDS = ("cpu_s", "wall_s", "forward_digest")
 
 
+def _write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a partial file replaced into place (an interrupted write leaves the old)."""
+    partial = path.with_name(path.name + ".partial")
+    partial.write_text(text)
+    partial.replace(path)
+
+
 def _equivalence_checks(file: Path) -> tuple[Path, list[dict]]:
     """The file recording ``file``'s equivalence checks and the checks in it (none yet: ``[]``)."""
     path = file.with_suffix(".equivalence.json")
@@ -914,9 +921,7 @@ def check_equivalence(file: Path, done: dict[str, dict], specs: list[dict], args
     path, checks = _equivalence_checks(file)
     checks.append({"digest": digest, "accepted": others, "twins": [s["id"] for s in chosen],
                    "date": time.strftime("%Y-%m-%d %H:%M:%S")})
-    partial = path.with_suffix(".partial")
-    partial.write_text(json.dumps(checks, indent=1) + "\n")
-    partial.replace(path)  # atomic: an interrupted write leaves the previous checks
+    _write_atomic(path, json.dumps(checks, indent=1) + "\n")
     print(f"equivalence check passed: {k} twins reproduced exactly; recorded in {path}", flush=True)
 
 
@@ -941,6 +946,12 @@ def _records(file: Path, cells: int) -> dict[str, dict]:
     return {r["id"]: r for r in map(json.loads, file.read_text().splitlines()) if r["cells"] == cells}
 
 
+def phase_files(results: Path, key: str) -> dict[str | None, Path]:
+    """The results files of result set ``key``: the first phase's (``None``) and each next-experiment phase's by
+    role, in the order the report reads them (and lists their commands)."""
+    return {None: results / f"{key}.jsonl"} | {r: next_experiment_file(results, key, r) for r in ADDED_AS}
+
+
 def restore(report: Path, results: Path) -> list[Path]:
     """Write the results files of a committed report (the ``.json`` of ``--out``: every finished twin's record and
     those of its next-experiment phases) back into ``results``, each with its generating command, so that a study
@@ -953,20 +964,17 @@ def restore(report: Path, results: Path) -> list[Path]:
         found = payload["sets"].get(title)
         if found is None:
             continue
-        phases.append((results / f"{name}.jsonl", found["twins"]))
-        phases += [(next_experiment_file(results, name, role), found[f"next_experiment_{role}"]["twins"])
-                   for role in ADDED_AS if f"next_experiment_{role}" in found]
+        phases += [(path, found["twins"] if role is None else found[f"next_experiment_{role}"]["twins"])
+                   for role, path in phase_files(results, name).items()
+                   if role is None or f"next_experiment_{role}" in found]
     existing = [str(path) for path, _ in phases if path.exists()]
     if existing:
         raise SystemExit(f"{', '.join(existing)} exist: --restore writes only results files that are not there")
     results.mkdir(parents=True, exist_ok=True)
     for path, records in phases:
         command = commands.pop(0) if commands else f"restored from {report}"
-        for target, text in ((path, "".join(json.dumps(r) + "\n" for r in records)),
-                             (path.with_suffix(".command"), command)):
-            tmp = target.with_name(target.name + ".tmp")
-            tmp.write_text(text)
-            tmp.replace(target)
+        _write_atomic(path, "".join(json.dumps(r) + "\n" for r in records))
+        _write_atomic(path.with_suffix(".command"), command)
     return [path for path, _ in phases]
 
 
@@ -986,9 +994,7 @@ def add_snrs(file: Path, jobs: int, every: int = 10) -> int:
     todo = [k for k, r in enumerate(records) if "snr_beyond_numerics" not in r]
 
     def save():
-        tmp = file.with_suffix(".jsonl.tmp")
-        tmp.write_text("".join(json.dumps(r) + "\n" for r in records))
-        tmp.replace(file)
+        _write_atomic(file, "".join(json.dumps(r) + "\n" for r in records))
 
     runs = Parallel(n_jobs=jobs, return_as="generator")(delayed(twin_snrs)(records[k]) for k in todo)
     for n, (k, snrs) in enumerate(zip(todo, runs), 1):
@@ -1135,8 +1141,7 @@ def main(argv=None) -> int:
             (results / f"{key}.command").write_text(command)
     sets, lifts, commands = {}, {}, []
     for name, (title, _) in SETS.items():
-        paths = {None: results / f"{name}.jsonl"} | {r: next_experiment_file(results, name, r) for r in ADDED_AS}
-        for role, path in paths.items():
+        for role, path in phase_files(results, name).items():
             if path.exists():
                 found = list(_records(path, args.cells).values())
                 if role is None:
